@@ -1,0 +1,1 @@
+#include "acquisition/range_grid_ply.h"

@@ -1,0 +1,13 @@
+// The command line is a thin layer: each subcommand parses flags into a stage's
+// options struct and calls the library.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace scan2lod::cli {
+
+void add_reconstruct_command(CLI::App& app);
+void add_scan_command(CLI::App& app);
+void add_compare_command(CLI::App& app);
+
+}  // namespace scan2lod::cli

@@ -1,0 +1,7 @@
+#include "cli/commands.h"
+
+namespace scan2lod::cli {
+
+void add_scan_command(CLI::App& app) { (void)app; }
+
+}  // namespace scan2lod::cli

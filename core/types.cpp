@@ -1,0 +1,25 @@
+#include "core/types.h"
+
+namespace scan2lod {
+
+Aabb bounds(const std::vector<Vec3f>& points) {
+  Aabb box;
+  for (const Vec3f& p : points) box.extend(p);
+  return box;
+}
+
+void OrientedPoints::append(const OrientedPoints& other) {
+  auto merge = [&](auto& mine, const auto& theirs, auto fill) {
+    if (mine.empty() && theirs.empty()) return;
+    if (mine.empty() && !positions.empty()) mine.assign(positions.size(), fill);
+    if (theirs.empty()) mine.insert(mine.end(), other.size(), fill);
+    else mine.insert(mine.end(), theirs.begin(), theirs.end());
+  };
+  merge(colors, other.colors, Rgb{200, 200, 200});
+  merge(confidence, other.confidence, 1.0f);
+  merge(spacing, other.spacing, 0.0f);
+  positions.insert(positions.end(), other.positions.begin(), other.positions.end());
+  normals.insert(normals.end(), other.normals.begin(), other.normals.end());
+}
+
+}  // namespace scan2lod

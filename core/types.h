@@ -1,0 +1,71 @@
+// Plain values passed between the pipeline's stages. Library types (PCL clouds,
+// OpenMesh meshes, VTK poly data) stay at the edges; these are what stages share.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace scan2lod {
+
+using Vec3f = Eigen::Vector3f;
+using Vec3d = Eigen::Vector3d;
+using Rgb = std::array<std::uint8_t, 3>;
+using Triangle = std::array<std::int32_t, 3>;
+
+// One range image in its own scan frame: a cols x rows lattice of samples, NaN where
+// the scanner had no return. The scanner sits on the +z side of the frame.
+struct RangeImage {
+  int cols = 0;
+  int rows = 0;
+  std::vector<Vec3f> points;      // cols*rows, row-major; NaN x for "no return"
+  std::vector<Rgb> colors;        // empty, or cols*rows
+  std::vector<float> confidence;  // empty, or cols*rows
+  std::string source;             // file it came from, for messages
+};
+
+// Rigid placement of a scan in the common frame: p_world = rotation * p_scan + translation.
+struct ScanPose {
+  Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();
+  Vec3f translation = Vec3f::Zero();
+};
+
+// Oriented samples of a surface. Normals are unit length and point outward.
+struct OrientedPoints {
+  std::vector<Vec3f> positions;
+  std::vector<Vec3f> normals;
+  std::vector<Rgb> colors;        // empty, or one per point
+  std::vector<float> confidence;  // empty, or one per point
+  std::vector<float> spacing;     // empty, or the local sample spacing at each point
+
+  std::size_t size() const { return positions.size(); }
+  bool has_colors() const { return !colors.empty(); }
+  // Appends other; attributes present on one side only are dropped (or filled).
+  void append(const OrientedPoints& other);
+};
+
+// Indexed triangle mesh with optional per-vertex attributes. Triangles are
+// counter-clockwise seen from outside.
+struct TriangleMesh {
+  std::vector<Vec3f> positions;
+  std::vector<Vec3f> normals;  // empty, or one per vertex
+  std::vector<Rgb> colors;     // empty, or one per vertex
+  std::vector<Triangle> triangles;
+};
+
+struct Aabb {
+  Vec3f min = Vec3f::Constant(std::numeric_limits<float>::max());
+  Vec3f max = Vec3f::Constant(-std::numeric_limits<float>::max());
+  void extend(const Vec3f& p) { min = min.cwiseMin(p); max = max.cwiseMax(p); }
+  bool empty() const { return !(min.array() <= max.array()).all(); }
+  Vec3f extent() const { return max - min; }
+  float diagonal() const { return empty() ? 0.f : extent().norm(); }
+};
+
+Aabb bounds(const std::vector<Vec3f>& points);
+
+}  // namespace scan2lod
