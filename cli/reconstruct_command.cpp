@@ -1,7 +1,59 @@
+#include "acquisition/load_inputs.h"
 #include "cli/commands.h"
+#include "io/mesh_file.h"
+#include "reconstruct/marching_cubes.h"
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
 
 namespace scan2lod::cli {
 
-void add_reconstruct_command(CLI::App& app) { (void)app; }
+void add_reconstruct_command(CLI::App& app) {
+  struct Args {
+    std::vector<std::string> inputs;
+    std::string output;
+    std::string method = "planes";
+    ReconstructOptions options;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* cmd = app.add_subcommand(
+      "reconstruct", "Range scans, organized clouds or a mesh -> marching-cubes mesh");
+  cmd->add_option("inputs", args->inputs,
+                  "A .conf, range-grid PLYs, organized PCDs, or a mesh (.ply .obj .off .stl)")
+      ->required();
+  cmd->add_option("-o,--output", args->output, "Output mesh (.ply .obj .stl .off .vtp)")->required();
+  cmd->add_option("-r,--resolution", args->options.resolution, "Cubes per side (power of two)")
+      ->capture_default_str();
+  cmd->add_option("--margin", args->options.margin,
+                  "Cubes grown around point-holding cubes before surface following")
+      ->capture_default_str();
+  cmd->add_option("--distance", args->method, "Signed distance: planes, hoppe or seed")
+      ->capture_default_str();
+  cmd->add_option("--neighbours", args->options.distance.neighbours,
+                  "Points averaged by the planes distance")
+      ->capture_default_str();
+  cmd->add_option("--max-distance", args->options.distance.max_distance,
+                  "Corners farther than this many cube sizes (or sample spacings) from data stay undefined")
+      ->capture_default_str();
+  cmd->add_option("--reach", args->options.reach,
+                  "Cubes reached by following the surface are kept within this many cube sizes (or sample spacings) of data")
+      ->capture_default_str();
+  cmd->add_option("-j,--threads", args->options.threads, "Threads (0: all cores)")->capture_default_str();
+  cmd->callback([args] {
+    using clock = std::chrono::steady_clock;
+    const auto start = clock::now();
+    args->options.distance.method = parse_distance_method(args->method);
+    AcquisitionOptions acquisition;
+    acquisition.threads = args->options.threads;
+    OrientedPoints points = load_oriented_points(args->inputs, acquisition);
+    Reconstruction r = reconstruct(points, args->options);
+    write_mesh(args->output, r.mesh);
+    const double seconds = std::chrono::duration<double>(clock::now() - start).count();
+    std::printf("%zu points, %zu cubes touched, %zu emitting, %zu triangles, %zu vertices, %.2f s -> %s\n",
+                r.stats.points, r.stats.cubes_touched, r.stats.cubes_emitting,
+                r.mesh.triangles.size(), r.mesh.positions.size(), seconds, args->output.c_str());
+  });
+}
 
 }  // namespace scan2lod::cli

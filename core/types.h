@@ -3,10 +3,12 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +28,10 @@ struct RangeImage {
   std::vector<Rgb> colors;        // empty, or cols*rows
   std::vector<float> confidence;  // empty, or cols*rows
   std::string source;             // file it came from, for messages
+  // The scanner's position in the scan frame for a perspective sensor (a PCD's
+  // VIEWPOINT); none for a scanner that looks down -z from the +z side
+  // (Stanford range grids, virtual scans).
+  std::optional<Vec3f> viewpoint;
 };
 
 // Rigid placement of a scan in the common frame: p_world = rotation * p_scan + translation.

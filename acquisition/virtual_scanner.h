@@ -1,0 +1,58 @@
+// Range images generated from a mesh (seed 003 §4.4, §6.3: "The input data
+// are generated from mesh models instead of range scanner"). Each view is an
+// orthographic range camera, like a Cyberware scanner sweeping parallel rays:
+// the scan frame has the scanner on its +z side looking along -z, x to the
+// right and y up, the same convention as the Stanford range grids, so virtual
+// scans and real ones go through the same reconstruction.
+#pragma once
+
+#include "core/types.h"
+
+#include <string>
+#include <vector>
+
+namespace scan2lod {
+
+struct VirtualScanOptions {
+  int views = 14;    // directions spread evenly on the sphere (golden spiral)
+  int width = 256;   // lattice columns per view
+  int height = 256;  // lattice rows per view
+};
+
+struct VirtualScan {
+  RangeImage image;  // lattice in the scan frame
+  ScanPose pose;     // scan frame -> mesh frame
+};
+
+// Scans `mesh` from options.views directions around its bounding sphere
+// (centre: the bounding box's centre; radius: the farthest vertex).
+// View i looks at the centre from direction d_i of a golden-spiral (Fibonacci)
+// set; its square-pixel window of width x height samples covers the bounding
+// sphere's disc with a 2% margin, so nothing of the mesh is cut off.
+// @return one VirtualScan per view, in order. In each image:
+//   - points: width*height, row-major, row 0 = top (largest y), column 0 =
+//     left (smallest x); the first surface hit along the ray, in the scan
+//     frame, or NaN (all three coordinates) where the ray missed.
+//   - colors: barycentric interpolation of the vertex colours at the hit when
+//     the mesh has colours, else empty (missed samples: black).
+//   - confidence: |cos| of the angle between the ray and the hit triangle's
+//     normal (1 facing the scanner, ->0 at grazing angles), 0 where missed.
+//   - the scan frame's origin is the bounding sphere's centre; pose maps it to
+//     the mesh frame: p_mesh = pose.rotation * p_scan + pose.translation.
+// Rays are cast by z-buffer rasterisation at the pixel centres, which for
+// parallel rays is exact and needs no acceleration structure. (Open3D's
+// RaycastingScene::CastRays misses every ray with Debian's Embree, which is
+// built with ray masks that Open3D 0.16 leaves at zero.) Both windings are
+// hit, as a scanner sees the inside of an open surface; triangles without
+// area, or seen edge-on, are never hit. Views are scanned in parallel (OpenMP).
+// Throws InputError when the mesh has no non-degenerate triangle, and
+// std::invalid_argument when views, width or height is < 1.
+std::vector<VirtualScan> virtual_scan(const TriangleMesh& mesh, const VirtualScanOptions& options);
+
+// Writes DIR/scan_000.ply, scan_001.ply, ... as binary range-grid PLYs and
+// DIR/scans.conf placing them (Stanford bmesh lines), creating DIR if needed.
+// Reading DIR/scans.conf back gives each scan's pose. Throws InputError when
+// DIR cannot be created or a file cannot be written.
+void write_scan_set(const std::string& dir, const std::vector<VirtualScan>& scans);
+
+}  // namespace scan2lod

@@ -1,0 +1,44 @@
+// Triangle meshes on disk: the pipeline's input models (seed 003 §6.3 reads
+// Cyberware PLY meshes) and its outputs. PLY, OFF and STL are read, and PLY,
+// OBJ, OFF and STL written, by OpenMesh; .vtp goes through VTK; OBJ is read by
+// a small parser here (Debian's OpenMesh asserts, i.e. aborts, on some broken
+// OBJ faces). The OpenMesh adapters copy straight between files and the plain
+// TriangleMesh, never through a half-edge mesh, so non-manifold faces
+// (marching-cubes and LOD output can have them) are neither dropped nor split.
+#pragma once
+
+#include "core/types.h"
+
+#include <string>
+
+namespace scan2lod {
+
+// Reads a mesh from a .ply, .obj, .off, .stl or .vtp file (extension decides,
+// case-insensitive). Polygons are fan-triangulated. Vertex normals and
+// colours are kept when the file has them (else `normals`/`colors` are empty;
+// OBJ colours are the `v x y z r g b` extension, OBJ normals count only when
+// every used vertex has one). STL has no shared vertices: OpenMesh merges
+// equal corner positions and skips triangles that collapse by it.
+// Throws InputError naming the file when it is missing, has an unknown
+// extension, cannot be parsed, is truncated, has no vertices or no faces, or
+// has a face that names a vertex that does not exist. A Stanford range-grid
+// PLY (`element range_grid`) is rejected with a hint to read it as a scan.
+// Thread-safe; PLY/OFF/STL reads are serialised internally (OpenMesh's readers
+// are singletons with per-file state).
+TriangleMesh read_mesh(const std::string& path);
+
+// Writes `mesh` to `path` in the format its extension names:
+//   .ply  binary little-endian, with vertex normals and colours when present
+//   .obj  ASCII, with `vn` normals when present (9 significant digits)
+//   .off  ASCII (NOFF/COFF when normals/colours are present)
+//   .stl  binary (normals and colours are not stored)
+//   .vtp  VTK XML poly data, raw appended binary, with "Normals" and an
+//         unsigned-char "RGB" array when present
+// `mesh` must be consistent: every triangle index < positions.size(), and
+// normals/colors empty or one per vertex. Output goes through a temporary file
+// renamed into place (write_atomically), so a failure leaves nothing behind.
+// Throws InputError for an unknown extension (listing the supported ones), an
+// inconsistent mesh, or a write failure (e.g. a missing directory).
+void write_mesh(const std::string& path, const TriangleMesh& mesh);
+
+}  // namespace scan2lod

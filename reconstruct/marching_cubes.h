@@ -1,0 +1,71 @@
+// Oriented points -> indexed triangle mesh by ratio-based marching cubes over a
+// sparse grid (seed 003 §4.2-4.3). Each vertex sits on its cube edge at the ratio
+// of the two corners' |signed distance|, not at the midpoint.
+//
+// Only cubes near data are touched: cubes that hold points (grown by `margin`),
+// then, following the surface, any neighbour across a face that the surface
+// crosses. Time and memory follow the surface area, not R^3.
+#pragma once
+
+#include "core/types.h"
+#include "reconstruct/cube_grid.h"
+#include "reconstruct/signed_distance.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace scan2lod {
+
+struct ReconstructOptions {
+  int resolution = 256;  // cubes per side of the bounding cube; a power of two
+  int margin = 0;        // cubes grown around point-holding cubes before surface following
+  // A cube reached by following the surface out of the point-holding cubes is
+  // used only if its centre lies within this many max(cube size, local sample
+  // spacing) of a point: small gaps in coverage close from both sides, while the
+  // surface stops soon past the rim of a real hole.
+  float reach = 2.5f;
+  SignedDistanceOptions distance;
+  int threads = 0;       // 0: all cores
+};
+
+// The leaf cube nodes (seed §4.3.2, §5.1): every cube that emits triangles, with
+// what the octree needs to build its parents. Flat arrays, one entry per cube;
+// corner data is shared between cubes through corner indices.
+struct CubeNodes {
+  CubeGrid grid;
+  std::vector<std::uint64_t> cube_keys;                     // packed (x, y, z) of the lower corner
+  std::vector<std::uint8_t> cases;                          // mask of inside corners
+  std::vector<std::array<std::int32_t, 8>> corners;         // into the corner arrays below
+  std::vector<std::array<std::int32_t, 12>> edge_vertices;  // mesh vertex on each edge, or -1
+  std::vector<std::array<float, 12>> edge_ratios;           // crossing along edge from its lower corner, 0 if none
+
+  std::vector<std::uint64_t> corner_keys;  // packed grid coordinates
+  std::vector<float> corner_distances;     // signed distance (never NaN for emitting cubes)
+  std::vector<Rgb> corner_colors;          // empty without colour input
+
+  std::size_t size() const { return cube_keys.size(); }
+};
+
+struct ReconstructStats {
+  std::size_t points = 0;
+  std::size_t cubes_touched = 0;      // cubes whose corners were evaluated
+  std::size_t corners_evaluated = 0;
+  std::size_t cubes_emitting = 0;
+  std::size_t following_rounds = 0;   // surface-following passes after the seed cubes
+};
+
+struct Reconstruction {
+  TriangleMesh mesh;  // vertices with normals (and colours if the points had them)
+  CubeNodes leaves;
+  ReconstructStats stats;
+};
+
+// @param[in] points  oriented points, normals outward; positions must be finite
+// Throws InputError for no points, non-finite points, or a bad resolution.
+Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOptions& options = {});
+
+// Area-weighted vertex normals of a mesh (unit length; zero for unused vertices).
+std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh);
+
+}  // namespace scan2lod

@@ -1,0 +1,111 @@
+#include "reconstruct/signed_distance.h"
+
+#include "core/error.h"
+
+#include <flann/flann.hpp>
+#include <omp.h>
+
+#include <cmath>
+#include <limits>
+
+namespace scan2lod {
+
+DistanceMethod parse_distance_method(const std::string& name) {
+  if (name == "seed") return DistanceMethod::seed;
+  if (name == "hoppe") return DistanceMethod::hoppe;
+  if (name == "planes") return DistanceMethod::planes;
+  throw InputError("", "unknown distance method '" + name + "': expected seed, hoppe or planes");
+}
+
+const char* distance_method_name(DistanceMethod method) {
+  switch (method) {
+    case DistanceMethod::seed: return "seed";
+    case DistanceMethod::hoppe: return "hoppe";
+    case DistanceMethod::planes: return "planes";
+  }
+  return "?";
+}
+
+struct PointIndex::Impl {
+  flann::Matrix<float> data;
+  flann::Index<flann::L2_Simple<float>> index;
+  explicit Impl(const OrientedPoints& points)
+      : data(const_cast<float*>(points.positions.front().data()), points.size(), 3),
+        index(data, flann::KDTreeSingleIndexParams(12)) {
+    index.buildIndex();
+  }
+};
+
+PointIndex::PointIndex(const OrientedPoints& points) {
+  if (points.size() == 0) throw InputError("", "no input points: nothing to reconstruct");
+  impl_ = std::make_unique<Impl>(points);
+}
+
+PointIndex::~PointIndex() = default;
+
+void PointIndex::knn(const Vec3f* queries, std::size_t count, int k, std::int32_t* indices,
+                     float* squared_distances, int threads) const {
+  if (count == 0) return;
+  flann::Matrix<float> q(const_cast<float*>(queries->data()), count, 3);
+  flann::Matrix<int> idx(indices, count, std::size_t(k));
+  flann::Matrix<float> dist(squared_distances, count, std::size_t(k));
+  flann::SearchParams params;
+  params.cores = threads > 0 ? threads : omp_get_max_threads();
+  params.sorted = true;
+  impl_->index.knnSearch(q, idx, dist, std::size_t(k), params);
+}
+
+void signed_distances(const OrientedPoints& points, const PointIndex& index,
+                      const std::vector<Vec3f>& queries, float cube_size,
+                      const SignedDistanceOptions& options, int threads,
+                      std::vector<float>* distance, std::vector<std::int32_t>* nearest) {
+  const std::size_t n = queries.size();
+  const int k = options.method == DistanceMethod::planes
+                    ? std::max(1, std::min<int>(options.neighbours, int(points.size())))
+                    : 1;
+  std::vector<std::int32_t> idx(n * std::size_t(k));
+  std::vector<float> d2(n * std::size_t(k));
+  index.knn(queries.data(), n, k, idx.data(), d2.data(), threads);
+  distance->assign(n, std::numeric_limits<float>::quiet_NaN());
+  nearest->assign(n, -1);
+  const bool have_spacing = points.spacing.size() == points.size();
+  const bool have_confidence = points.confidence.size() == points.size();
+  const int nthreads = threads > 0 ? threads : omp_get_max_threads();
+#pragma omp parallel for schedule(static) num_threads(nthreads)
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t* id = &idx[i * k];
+    const float* dd = &d2[i * k];
+    const std::int32_t p0 = id[0];
+    if (p0 < 0) continue;
+    const float scale = std::max(cube_size, have_spacing ? points.spacing[p0] : 0.f);
+    const float limit = options.max_distance * scale;
+    if (dd[0] > limit * limit) continue;
+    (*nearest)[i] = p0;
+    const Vec3f& v = queries[i];
+    const Vec3f offset = v - points.positions[p0];
+    const float plane = offset.dot(points.normals[p0]);
+    switch (options.method) {
+      case DistanceMethod::seed:
+        (*distance)[i] = std::copysign(offset.norm(), plane);
+        break;
+      case DistanceMethod::hoppe:
+        (*distance)[i] = plane;
+        break;
+      case DistanceMethod::planes: {
+        const float sigma = options.kernel_width * scale;
+        const float inv = 1.0f / (sigma * sigma);
+        double sum = 0.0, weight = 0.0;
+        for (int j = 0; j < k && id[j] >= 0; ++j) {
+          float w = std::exp(-(dd[j] - dd[0]) * inv);  // shifted: no underflow far out
+          if (have_confidence) w *= points.confidence[id[j]];
+          sum += double(w) * (v - points.positions[id[j]]).dot(points.normals[id[j]]);
+          weight += w;
+        }
+        (*distance)[i] = weight > 0.0 ? float(sum / weight) : plane;
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace scan2lod

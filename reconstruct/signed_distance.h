@@ -1,0 +1,63 @@
+// Signed distance from oriented points at cube corners (seed 003 §4.2), with the
+// closest points found by FLANN's exact kd-tree. Positive outside, negative inside.
+#pragma once
+
+#include "core/types.h"
+
+#include <memory>
+#include <string>
+
+namespace scan2lod {
+
+enum class DistanceMethod {
+  seed,    // sign((v - p)·n_p) * |v - p| with p the closest point (seed §4.2)
+  hoppe,   // (v - p)·n_p, the closest point's tangent plane (Hoppe et al. 1992)
+  planes,  // Gaussian-weighted mean of the k closest points' tangent-plane distances
+};
+
+DistanceMethod parse_distance_method(const std::string& name);
+const char* distance_method_name(DistanceMethod method);
+
+struct SignedDistanceOptions {
+  // planes averages overlapping scans' tangent planes and measures best on the
+  // bunny (see README, "Accuracy"), so it is the default.
+  DistanceMethod method = DistanceMethod::planes;
+  int neighbours = 12;  // k for planes
+  // Gaussian width for planes, in units of max(cube size, local sample spacing).
+  float kernel_width = 1.0f;
+  // A corner whose closest point is farther than this many max(cube size, local
+  // sample spacing) is undefined: no surface is invented far from the data.
+  float max_distance = 4.0f;
+};
+
+// An exact kd-tree over the points' positions (FLANN KDTreeSingleIndex).
+class PointIndex {
+ public:
+  explicit PointIndex(const OrientedPoints& points);
+  ~PointIndex();
+  PointIndex(const PointIndex&) = delete;
+  PointIndex& operator=(const PointIndex&) = delete;
+
+  // For each query, the k nearest points (indices, squared distances), row-major
+  // count x k. Runs on `threads` threads (0: all).
+  void knn(const Vec3f* queries, std::size_t count, int k, std::int32_t* indices,
+           float* squared_distances, int threads) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Signed distance at each query position.
+// @param[in]  points     oriented points (spacing optional: empty = cube size)
+// @param[in]  index      PointIndex over points
+// @param[in]  queries    #Q positions
+// @param[in]  cube_size  the grid's cube edge length
+// @param[out] distance   #Q signed distances; NaN where undefined
+// @param[out] nearest    #Q indices of the closest point (for attributes)
+void signed_distances(const OrientedPoints& points, const PointIndex& index,
+                      const std::vector<Vec3f>& queries, float cube_size,
+                      const SignedDistanceOptions& options, int threads,
+                      std::vector<float>* distance, std::vector<std::int32_t>* nearest);
+
+}  // namespace scan2lod
