@@ -63,7 +63,9 @@ std::vector<VirtualScan> virtual_scan(const TriangleMesh& mesh, const VirtualSca
   Aabb used;
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const Triangle& tri = mesh.triangles[t];
-    const Vec3f &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
+    const Vec3f& a = mesh.positions[tri[0]];
+    const Vec3f& b = mesh.positions[tri[1]];
+    const Vec3f& c = mesh.positions[tri[2]];
     const double area2 = (b - a).cast<double>().cross((c - a).cast<double>()).norm();
     if (!(area2 > tiny) || !std::isfinite(area2)) continue;
     solid.push_back(std::uint32_t(t));

@@ -24,7 +24,8 @@ struct VirtualScan {
   ScanPose pose;     // scan frame -> mesh frame
 };
 
-// Scans `mesh` from options.views directions around its bounding sphere
+// Scans `mesh` (triangle indices < positions.size()) from options.views
+// directions around its bounding sphere
 // (centre: the bounding box's centre; radius: the farthest vertex).
 // View i looks at the centre from direction d_i of a golden-spiral (Fibonacci)
 // set; its square-pixel window of width x height samples covers the bounding
@@ -40,9 +41,9 @@ struct VirtualScan {
 //   - the scan frame's origin is the bounding sphere's centre; pose maps it to
 //     the mesh frame: p_mesh = pose.rotation * p_scan + pose.translation.
 // Rays are cast by z-buffer rasterisation at the pixel centres, which for
-// parallel rays is exact and needs no acceleration structure. (Open3D's
-// RaycastingScene::CastRays misses every ray with Debian's Embree, which is
-// built with ray masks that Open3D 0.16 leaves at zero.) Both windings are
+// parallel rays is exact and needs no acceleration structure. (Debian 12's
+// Open3D 0.16 RaycastingScene::CastRays reports no hit for any ray, even on a
+// box, while its distance queries work; hence no Open3D here.) Both windings are
 // hit, as a scanner sees the inside of an open surface; triangles without
 // area, or seen edge-on, are never hit. Views are scanned in parallel (OpenMP).
 // Throws InputError when the mesh has no non-degenerate triangle, and

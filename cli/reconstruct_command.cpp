@@ -39,6 +39,15 @@ void add_reconstruct_command(CLI::App& app) {
   cmd->add_option("--reach", args->options.reach,
                   "Cubes reached by following the surface are kept within this many cube sizes (or sample spacings) of data")
       ->capture_default_str();
+  cmd->add_option("--min-piece", args->options.min_piece,
+                  "Remove pieces with less than this fraction of the triangles (0: keep all)")
+      ->capture_default_str();
+  cmd->add_option("--max-hole", args->options.max_hole,
+                  "Close holes whose rim has at most this many edges per cube of resolution (0: none)")
+      ->capture_default_str();
+  cmd->add_option("--hole-rounds", args->options.hole_rounds,
+                  "Rings of cubes a small hole is closed by from each side, at most")
+      ->capture_default_str();
   cmd->add_option("-j,--threads", args->options.threads, "Threads (0: all cores)")->capture_default_str();
   cmd->callback([args] {
     using clock = std::chrono::steady_clock;

@@ -62,9 +62,8 @@ void add_scan_command(CLI::App& app) {
       ->check(CLI::Validator(
           [](std::string& text) {
             int w, h;
-            return parse_size(text, w, h)
-                       ? std::string()
-                       : "expected WIDTHxHEIGHT such as 256x256 (each 1..16384), got '" + text + "'";
+            if (parse_size(text, w, h)) return std::string();
+            return "expected WIDTHxHEIGHT such as 256x256 (each 1..16384), got '" + text + "'";
           },
           "WxH"));
   cmd->callback([args] { run(*args); });

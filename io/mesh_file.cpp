@@ -20,6 +20,7 @@
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
 #include <vtkCommand.h>
+#include <vtkExecutive.h>
 #include <vtkFloatArray.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -167,7 +168,9 @@ class FlatImporter : public omio::BaseImporter {
   OpenMesh::HalfedgeHandle add_edge(OpenMesh::VertexHandle, OpenMesh::VertexHandle) override {
     return OpenMesh::HalfedgeHandle();
   }
-  OpenMesh::FaceHandle add_face(OpenMesh::HalfedgeHandle) override { return OpenMesh::FaceHandle(); }
+  OpenMesh::FaceHandle add_face(OpenMesh::HalfedgeHandle) override {
+    return OpenMesh::FaceHandle();
+  }
   void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle,
                           const std::vector<OpenMesh::Vec2f>&) override {}
   void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle,
@@ -248,6 +251,7 @@ ExpectedCounts check_ply_header(const std::string& path) {
 
   struct Property {
     std::string name;
+    std::string count_type;  // lists only
     bool list = false;
     int size = 0, count_size = 0;
   };
@@ -287,10 +291,12 @@ ExpectedCounts check_ply_header(const std::string& path) {
         std::string count_type, item_type;
         words >> count_type >> item_type >> p.name;
         p.list = true;
+        p.count_type = count_type;
         p.count_size = ply_type_size(count_type);
         p.size = ply_type_size(item_type);
         if (!p.count_size || !p.size)
-          throw InputError(path, where + ": unknown list type '" + count_type + " " + item_type + "'");
+          throw InputError(path, where + ": unknown list type '" + count_type + " " +
+                                     item_type + "'");
       } else {
         words >> p.name;
         p.size = ply_type_size(type);
@@ -306,7 +312,10 @@ ExpectedCounts check_ply_header(const std::string& path) {
   }
   if (!ended) throw InputError(path, "PLY header has no end_header line");
   if (format.empty()) throw InputError(path, "PLY header has no format line");
-  const std::uintmax_t body = file_size_or_zero(path) - std::uintmax_t(in.tellg());
+  const std::streamoff header_end = in.tellg();  // -1 when the file ends at end_header
+  const std::uintmax_t size = file_size_or_zero(path);
+  const std::uintmax_t body =
+      header_end < 0 || std::uintmax_t(header_end) > size ? 0 : size - std::uintmax_t(header_end);
 
   for (const Element& e : elements)
     if (e.name == "range_grid")
@@ -327,9 +336,11 @@ ExpectedCounts check_ply_header(const std::string& path) {
           (e.props[0].name != "vertex_indices" && e.props[0].name != "vertex_index"))
         throw InputError(path, "PLY element face must start with a list property "
                                "vertex_indices");
-      const Property& idx = e.props[0];
-      if (idx.count_size > 2 && idx.count_size != 4)
-        throw InputError(path, "PLY face list count type is not supported");
+      const std::string& count_type = e.props[0].count_type;
+      if (count_type != "uchar" && count_type != "uint8" && count_type != "uint16" &&
+          count_type != "int")
+        throw InputError(path, "PLY face list count type '" + count_type +
+                                   "' is not supported; expected uchar, uint8, uint16 or int");
     }
     std::uintmax_t per = 0;
     for (std::size_t i = 0; i < e.props.size(); ++i) {
@@ -586,7 +597,8 @@ TriangleMesh read_obj(const std::string& path) {
     mesh.colors.resize(mesh.positions.size());
     for (std::size_t v = 0; v < color_values.size(); ++v)
       for (int c = 0; c < 3; ++c)
-        mesh.colors[v][c] = std::uint8_t(std::lround(std::clamp(color_values[v][c], 0.f, 1.f) * 255.f));
+        mesh.colors[v][c] =
+            std::uint8_t(std::lround(std::clamp(color_values[v][c], 0.f, 1.f) * 255.f));
   }
   return mesh;
 }
@@ -597,19 +609,26 @@ TriangleMesh read_obj(const std::string& path) {
 // Collects VTK error messages so that they end up in our exception, not on stderr.
 class VtkErrorCatcher {
  public:
-  explicit VtkErrorCatcher(vtkObject* watched) {
+  VtkErrorCatcher() {
     callback_->SetClientData(&message_);
     callback_->SetCallback([](vtkObject*, unsigned long, void* client, void* call) {
       auto* message = static_cast<std::string*>(client);
       if (message->empty() && call) *message = static_cast<const char*>(call);
     });
-    watched->AddObserver(vtkCommand::ErrorEvent, callback_);
   }
+  // Errors become the exception's message; warnings (a malformed optional
+  // array, say) only mean that attribute is left out.
+  void watch(vtkObject* object) {
+    object->AddObserver(vtkCommand::ErrorEvent, callback_);
+    object->AddObserver(vtkCommand::WarningEvent, ignore_);
+  }
+  vtkCommand* command() { return callback_; }
   const std::string& message() const { return message_; }
 
  private:
   std::string message_;
   vtkNew<vtkCallbackCommand> callback_;
+  vtkNew<vtkCallbackCommand> ignore_;  // no callback set: does nothing
 };
 
 std::string first_line(std::string s) {
@@ -619,12 +638,20 @@ std::string first_line(std::string s) {
 }
 
 TriangleMesh read_vtp(const std::string& path) {
+  VtkErrorCatcher errors;  // outlives the reader that reports to it
   vtkNew<vtkXMLPolyDataReader> reader;
   if (!reader->CanReadFile(path.c_str()))
     throw InputError(path, "not a VTK XML PolyData (.vtp) file");
-  VtkErrorCatcher errors(reader);
+  errors.watch(reader);
+  errors.watch(reader->GetExecutive());
+  reader->SetParserErrorObserver(errors.command());
+  reader->SetReaderErrorObserver(errors.command());
   reader->SetFileName(path.c_str());
-  reader->Update();
+  try {
+    reader->Update();
+  } catch (const std::exception& e) {  // e.g. bad_alloc for a garbled array size
+    throw InputError(path, std::string("cannot parse as vtp: ") + e.what());
+  }
   vtkPolyData* poly = reader->GetOutput();
   if (!errors.message().empty() || reader->GetErrorCode() != 0 || !poly)
     throw InputError(path, "cannot parse as vtp: " + first_line(errors.message()));
@@ -650,8 +677,9 @@ TriangleMesh read_vtp(const std::string& path) {
                                      " but the file has " + std::to_string(n) + " points");
       for (vtkIdType k = 0; k + 2 < count; ++k) {
         if (strip)  // every other strip triangle is wound the other way
-          mesh.triangles.push_back(k % 2 == 0 ? Triangle{int(ids[k]), int(ids[k + 1]), int(ids[k + 2])}
-                                              : Triangle{int(ids[k + 1]), int(ids[k]), int(ids[k + 2])});
+          mesh.triangles.push_back(
+              k % 2 == 0 ? Triangle{int(ids[k]), int(ids[k + 1]), int(ids[k + 2])}
+                         : Triangle{int(ids[k + 1]), int(ids[k]), int(ids[k + 2])});
         else
           mesh.triangles.push_back({int(ids[0]), int(ids[k + 1]), int(ids[k + 2])});
       }
@@ -753,7 +781,8 @@ class FlatExporter : public omio::BaseExporter {
   unsigned int get_face_texcoords(std::vector<OpenMesh::Vec2f>&) const override { return 0; }
   OpenMesh::Vec3f normal(OpenMesh::FaceHandle fh) const override {
     const Triangle& t = m_.triangles[std::size_t(fh.idx())];
-    Vec3f n = (m_.positions[t[1]] - m_.positions[t[0]]).cross(m_.positions[t[2]] - m_.positions[t[0]]);
+    const Vec3f& a = m_.positions[t[0]];
+    Vec3f n = (m_.positions[t[1]] - a).cross(m_.positions[t[2]] - a);
     if (n.norm() > 0) n.normalize();
     return {n.x(), n.y(), n.z()};
   }
@@ -886,14 +915,18 @@ void write_vtp(const std::string& tmp, const std::string& final_path, const Tria
     poly->GetPointData()->SetScalars(rgb);
   }
 
+  VtkErrorCatcher errors;  // outlives the writer that reports to it
   vtkNew<vtkXMLPolyDataWriter> writer;
-  VtkErrorCatcher errors(writer);
+  errors.watch(writer);
+  errors.watch(writer->GetExecutive());
   writer->SetFileName(tmp.c_str());
   writer->SetInputData(poly);
-  // Raw appended binary with LZ4: much faster than the zlib/base64 default.
+  // Raw appended binary, uncompressed: several times faster than the
+  // zlib/base64 default, and VTK's reader crashes on damaged compressed
+  // blocks while it reports damaged raw ones.
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
-  writer->SetCompressorTypeToLZ4();
+  writer->SetCompressorTypeToNone();
   if (writer->Write() != 1 || writer->GetErrorCode() != 0 || !errors.message().empty())
     throw InputError(final_path, "writing vtp failed: " + first_line(errors.message()));
 }

@@ -23,6 +23,8 @@ namespace scan2lod {
 // extension, cannot be parsed, is truncated, has no vertices or no faces, or
 // has a face that names a vertex that does not exist. A Stanford range-grid
 // PLY (`element range_grid`) is rejected with a hint to read it as a scan.
+// Caveat: a damaged *compressed* .vtp (as ParaView writes by default) can crash
+// inside VTK's reader; damaged uncompressed ones (as written here) are reported.
 // Thread-safe; PLY/OFF/STL reads are serialised internally (OpenMesh's readers
 // are singletons with per-file state).
 TriangleMesh read_mesh(const std::string& path);
@@ -32,8 +34,8 @@ TriangleMesh read_mesh(const std::string& path);
 //   .obj  ASCII, with `vn` normals when present (9 significant digits)
 //   .off  ASCII (NOFF/COFF when normals/colours are present)
 //   .stl  binary (normals and colours are not stored)
-//   .vtp  VTK XML poly data, raw appended binary, with "Normals" and an
-//         unsigned-char "RGB" array when present
+//   .vtp  VTK XML poly data, raw appended binary (uncompressed), with
+//         "Normals" and an unsigned-char "RGB" array when present
 // `mesh` must be consistent: every triangle index < positions.size(), and
 // normals/colors empty or one per vertex. Output goes through a temporary file
 // renamed into place (write_atomically), so a failure leaves nothing behind.

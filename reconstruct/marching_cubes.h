@@ -4,7 +4,9 @@
 //
 // Only cubes near data are touched: cubes that hold points (grown by `margin`),
 // then, following the surface, any neighbour across a face that the surface
-// crosses. Time and memory follow the surface area, not R^3.
+// crosses. Time and memory follow the surface area, not R^3. Afterwards small
+// detached pieces are removed and small holes closed, both cube by cube, so the
+// mesh stays exactly the marching cubes of the kept leaf cubes.
 #pragma once
 
 #include "core/types.h"
@@ -25,6 +27,14 @@ struct ReconstructOptions {
   // spacing) of a point: small gaps in coverage close from both sides, while the
   // surface stops soon past the rim of a real hole.
   float reach = 2.5f;
+  // Pieces of the surface with fewer than this fraction of its triangles are
+  // removed (specks and fins off thin edges); 0 keeps every piece.
+  double min_piece = 0.01;
+  // Holes whose rim has at most max_hole * resolution edges are closed by
+  // marching on into the cubes across them, with corners evaluated beyond the
+  // distance limits; larger holes are the data's own and stay. 0 closes none.
+  double max_hole = 0.4;
+  int hole_rounds = 4;  // rings of cubes a hole is closed by from each side, at most
   SignedDistanceOptions distance;
   int threads = 0;       // 0: all cores
 };
@@ -36,6 +46,7 @@ struct CubeNodes {
   CubeGrid grid;
   std::vector<std::uint64_t> cube_keys;                     // packed (x, y, z) of the lower corner
   std::vector<std::uint8_t> cases;                          // mask of inside corners
+  std::vector<std::uint16_t> triangle_masks;                // kept triangles of the case (bit t)
   std::vector<std::array<std::int32_t, 8>> corners;         // into the corner arrays below
   std::vector<std::array<std::int32_t, 12>> edge_vertices;  // mesh vertex on each edge, or -1
   std::vector<std::array<float, 12>> edge_ratios;           // crossing along edge from its lower corner, 0 if none
@@ -53,6 +64,8 @@ struct ReconstructStats {
   std::size_t corners_evaluated = 0;
   std::size_t cubes_emitting = 0;
   std::size_t following_rounds = 0;   // surface-following passes after the seed cubes
+  std::size_t triangles_dropped = 0;  // triangles of pieces under min_piece
+  std::size_t cubes_hole_closing = 0; // cubes added to close small holes
 };
 
 struct Reconstruction {
