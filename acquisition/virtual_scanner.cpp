@@ -141,7 +141,9 @@ std::vector<VirtualScan> virtual_scan(const TriangleMesh& mesh, const VirtualSca
     image.points.assign(samples, Vec3f::Constant(std::numeric_limits<float>::quiet_NaN()));
     image.confidence.assign(samples, 0.f);
     if (colored) image.colors.assign(samples, Rgb{0, 0, 0});
-    image.source = "virtual scan " + std::to_string(view);
+    char name[32];
+    std::snprintf(name, sizeof name, "scan_%03zu", view);
+    image.source = name;
     for (std::size_t i = 0; i < samples; ++i) {
       if (hit[i] < 0) continue;
       const int r = int(i / std::size_t(W)), c = int(i % std::size_t(W));
@@ -164,24 +166,6 @@ std::vector<VirtualScan> virtual_scan(const TriangleMesh& mesh, const VirtualSca
   }
   progress.finish();
   return scans;
-}
-
-void write_scan_set(const std::string& dir, const std::vector<VirtualScan>& scans) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir))
-    throw InputError(dir, "cannot create the output folder: " + ec.message());
-  std::vector<ConfEntry> entries;
-  entries.reserve(scans.size());
-  for (std::size_t i = 0; i < scans.size(); ++i) {
-    char name[32];
-    std::snprintf(name, sizeof name, "scan_%03zu.ply", i);
-    const std::string file = (fs::path(dir) / name).string();
-    write_range_grid_ply(file, scans[i].image);
-    entries.push_back({file, scans[i].pose});
-  }
-  write_conf((fs::path(dir) / "scans.conf").string(), entries);
 }
 
 }  // namespace scan2lod

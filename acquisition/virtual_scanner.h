@@ -6,6 +6,7 @@
 // scans and real ones go through the same reconstruction.
 #pragma once
 
+#include "acquisition/scan_set.h"
 #include "core/types.h"
 
 #include <string>
@@ -19,10 +20,7 @@ struct VirtualScanOptions {
   int height = 256;  // lattice rows per view
 };
 
-struct VirtualScan {
-  RangeImage image;  // lattice in the scan frame
-  ScanPose pose;     // scan frame -> mesh frame
-};
+using VirtualScan = PlacedScan;  // pose: scan frame -> mesh frame
 
 // Scans `mesh` (triangle indices < positions.size()) from options.views
 // directions around its bounding sphere
@@ -50,10 +48,7 @@ struct VirtualScan {
 // std::invalid_argument when views, width or height is < 1.
 std::vector<VirtualScan> virtual_scan(const TriangleMesh& mesh, const VirtualScanOptions& options);
 
-// Writes DIR/scan_000.ply, scan_001.ply, ... as binary range-grid PLYs and
-// DIR/scans.conf placing them (Stanford bmesh lines), creating DIR if needed.
-// Reading DIR/scans.conf back gives each scan's pose. Throws InputError when
-// DIR cannot be created or a file cannot be written.
-void write_scan_set(const std::string& dir, const std::vector<VirtualScan>& scans);
+// Virtual scans are written with write_scan_set (acquisition/scan_set.h):
+// DIR/scan_000.ply, ... and DIR/scans.conf.
 
 }  // namespace scan2lod

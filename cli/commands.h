@@ -9,5 +9,6 @@ namespace scan2lod::cli {
 void add_reconstruct_command(CLI::App& app);
 void add_scan_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
+void add_convert_command(CLI::App& app);
 
 }  // namespace scan2lod::cli

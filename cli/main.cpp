@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   scan2lod::cli::add_reconstruct_command(app);
   scan2lod::cli::add_scan_command(app);
   scan2lod::cli::add_compare_command(app);
+  scan2lod::cli::add_convert_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -15,6 +15,7 @@ void add_reconstruct_command(CLI::App& app) {
     std::string output;
     std::string method = "planes";
     ReconstructOptions options;
+    bool verbose = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
@@ -49,15 +50,29 @@ void add_reconstruct_command(CLI::App& app) {
                   "Rings of cubes a small hole is closed by from each side, at most")
       ->capture_default_str();
   cmd->add_option("-j,--threads", args->options.threads, "Threads (0: all cores)")->capture_default_str();
+  cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each stage");
   cmd->callback([args] {
     using clock = std::chrono::steady_clock;
     const auto start = clock::now();
     args->options.distance.method = parse_distance_method(args->method);
+    check_mesh_output(args->output);
     AcquisitionOptions acquisition;
     acquisition.threads = args->options.threads;
     OrientedPoints points = load_oriented_points(args->inputs, acquisition);
+    const double read_seconds = std::chrono::duration<double>(clock::now() - start).count();
     Reconstruction r = reconstruct(points, args->options);
+    const auto write_start = clock::now();
     write_mesh(args->output, r.mesh);
+    if (args->verbose) {
+      const ReconstructStats& s = r.stats;
+      std::printf("read %.3f s, kd-tree %.3f s, signed distances %.3f s (%zu corners, %zu following rounds), "
+                  "marching cubes %.3f s, pieces and holes %.3f s (%zu triangles dropped, %zu cubes closing holes), "
+                  "attributes %.3f s, write %.3f s\n",
+                  read_seconds, s.seconds_index, s.seconds_distances, s.corners_evaluated, s.following_rounds,
+                  s.seconds_emit, s.seconds_cleanup, s.triangles_dropped, s.cubes_hole_closing,
+                  s.seconds_attributes,
+                  std::chrono::duration<double>(clock::now() - write_start).count());
+    }
     const double seconds = std::chrono::duration<double>(clock::now() - start).count();
     std::printf("%zu points, %zu cubes touched, %zu emitting, %zu triangles, %zu vertices, %.2f s -> %s\n",
                 r.stats.points, r.stats.cubes_touched, r.stats.cubes_emitting,

@@ -960,16 +960,21 @@ TriangleMesh read_mesh(const std::string& path) {
   return mesh;
 }
 
-void write_mesh(const std::string& path, const TriangleMesh& mesh) {
+void check_mesh_output(const std::string& path) {
   const std::string ext = lower_extension(path);
-  const bool openmesh = ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl";
-  if (!openmesh && ext != ".vtp")
+  if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl" && ext != ".vtp")
     throw InputError(path, "unknown mesh extension '" + ext + "', expected " + kFormats);
-  check_consistent(path, mesh);
   const fs::path folder = fs::path(path).parent_path();
   std::error_code ec;
   if (!folder.empty() && !fs::is_directory(folder, ec))
     throw InputError(path, "cannot write: folder " + folder.string() + " does not exist");
+}
+
+void write_mesh(const std::string& path, const TriangleMesh& mesh) {
+  check_mesh_output(path);
+  const std::string ext = lower_extension(path);
+  const bool openmesh = ext != ".vtp";
+  check_consistent(path, mesh);
   write_atomically(path, [&](const std::string& tmp) {
     if (openmesh)
       write_with_openmesh(tmp, path, ext, mesh);

@@ -43,4 +43,8 @@ TriangleMesh read_mesh(const std::string& path);
 // inconsistent mesh, or a write failure (e.g. a missing directory).
 void write_mesh(const std::string& path, const TriangleMesh& mesh);
 
+// Throws InputError unless write_mesh could write `path`: a known extension in
+// an existing folder. Commands call it before long work, not after.
+void check_mesh_output(const std::string& path);
+
 }  // namespace scan2lod

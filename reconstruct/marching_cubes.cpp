@@ -8,6 +8,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -95,14 +96,16 @@ class SurfaceBuilder {
   // triangle_cube and triangle_slot say which cube, and which of its case's
   // triangles, each mesh triangle is.
   void emit(CubeNodes* leaves, TriangleMesh* mesh, std::vector<std::int32_t>* triangle_cube,
-            std::vector<std::uint8_t>* triangle_slot) const {
+            std::vector<std::uint8_t>* triangle_slot) {
     const auto& table = cube_cases();
     *leaves = CubeNodes{};
     *mesh = TriangleMesh{};
     triangle_cube->clear();
     triangle_slot->clear();
     leaves->grid = grid_;
-    std::vector<std::int32_t> source;  // leaf -> cube
+    std::vector<std::int32_t>& source = leaf_cube_;
+    source.clear();
+    emitting_.assign(cube_keys_.size(), 0);
     for (std::size_t c = 0; c < cube_keys_.size(); ++c) {
       std::uint8_t mask;
       if (!usable_[c] || !cube_case(c, &mask) || mask == 0 || mask == 255) continue;
@@ -112,6 +115,7 @@ class SurfaceBuilder {
       leaves->triangle_masks.push_back(masks_[c]);
       leaves->corners.push_back(cube_corners_[c]);
       source.push_back(std::int32_t(c));
+      emitting_[c] = 1;
     }
     // One shared vertex per crossed grid edge, keyed by its lower corner and axis.
     FlatHashMap edge_index(leaves->size() * 2);
@@ -188,71 +192,27 @@ class SurfaceBuilder {
 
   // One round of hole closing: every cube across an open face of a boundary
   // loop of at most `max_edges` edges is made usable, its missing corners
-  // evaluated without the distance limits. Returns the number of cubes added.
-  std::size_t grow_into_small_holes(const TriangleMesh& mesh, const std::vector<std::int32_t>& triangle_cube,
-                                    const CubeNodes& leaves, std::size_t max_edges) {
-    // Boundary edges: used by one triangle.
-    struct Edge { std::int32_t a, b, triangle, slot; };
-    std::vector<Edge> edges;
-    edges.reserve(mesh.triangles.size() * 3);
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k) {
-        std::int32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-        edges.push_back({std::min(a, b), std::max(a, b), std::int32_t(t), k});
-      }
-    std::sort(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) {
-      return x.a != y.a ? x.a < y.a : x.b < y.b;
-    });
-    std::vector<Edge> boundary;
-    for (std::size_t i = 0; i < edges.size();) {
-      std::size_t j = i;
-      while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b) ++j;
-      if (j - i == 1) boundary.push_back(edges[i]);
-      i = j;
-    }
-    if (boundary.empty()) return 0;
-    UnionFind uf(mesh.positions.size());
-    for (const Edge& e : boundary) uf.unite(e.a, e.b);
-    std::vector<std::int32_t> loop_edges(mesh.positions.size(), 0);
-    for (const Edge& e : boundary) ++loop_edges[uf.find(e.a)];
-
-    // Leaf of each cube, to find a triangle's local edges.
-    FlatHashMap leaf_of(leaves.size());
-    for (std::size_t l = 0; l < leaves.size(); ++l) leaf_of.insert(leaves.cube_keys[l], std::int32_t(l));
+  // evaluated under relaxed distance limits. Returns the number of cubes added.
+  std::size_t grow_into_small_holes(const CubeNodes& leaves, std::size_t vertex_count, std::size_t max_edges) {
+    const std::vector<OpenEdge> open = open_edges(leaves);
+    if (open.empty()) return 0;
+    UnionFind loops(vertex_count);
+    for (const OpenEdge& e : open) loops.unite(e.a, e.b);
+    std::vector<std::int32_t> loop_edges(vertex_count, 0);
+    for (const OpenEdge& e : open) ++loop_edges[loops.find(e.a)];
     std::vector<std::int32_t> grow;
-    for (const Edge& e : boundary) {
-      if (std::size_t(loop_edges[uf.find(e.a)]) > max_edges) continue;
-      const std::int32_t cube = triangle_cube[e.triangle];
-      const std::int32_t leaf = leaf_of.find(cube_keys_[cube]);
-      // Local edges of the triangle's two ends, through the leaf's edge vertices.
-      int local[2] = {-1, -1};
-      const Triangle& tri = mesh.triangles[e.triangle];
-      for (int k = 0; k < 2; ++k) {
-        const std::int32_t v = tri[(e.slot + k) % 3];
-        for (int le = 0; le < 12; ++le)
-          if (leaves.edge_vertices[leaf][le] == v) local[k] = le;
-      }
-      const int face = shared_face(local[0], local[1]);
-      if (face < 0) continue;
-      const int axis = face / 2, side = face % 2;
-      int xyz[3];
-      unpack_key(cube_keys_[cube], &xyz[0], &xyz[1], &xyz[2]);
-      const int n = xyz[axis] + (side ? 1 : -1);
-      if (n < 0 || n >= grid_.resolution) continue;
-      const std::uint64_t key = side ? cube_keys_[cube] + kAxisStep[axis] : cube_keys_[cube] - kAxisStep[axis];
+    for (const OpenEdge& e : open) {
+      if (std::size_t(loop_edges[loops.find(e.a)]) > max_edges) continue;
+      std::uint64_t key;
+      if (!neighbour_key(e.cube, e.face, &key)) continue;
       std::int32_t id = cube_index_.find(key);
       if (id < 0) {
-        id = std::int32_t(cube_keys_.size());
-        cube_index_.insert(key, id);
-        cube_keys_.push_back(key);
-        usable_.push_back(0);
-        grown_.push_back(0);
-        masks_.push_back(0xffff);
-        cube_corners_.emplace_back();
-        cube_corners_.back().fill(-1);
+        add_cube(key);
+        id = std::int32_t(cube_keys_.size() - 1);
+        usable_[id] = 0;
       }
       std::uint8_t mask;
-      if (!grown_[id] && (!usable_[id] || !cube_case(std::size_t(id), &mask))) grow.push_back(id);
+      if (id >= 0 && !grown_[id] && (!usable_[id] || !cube_case(std::size_t(id), &mask))) grow.push_back(id);
     }
     std::sort(grow.begin(), grow.end());
     grow.erase(std::unique(grow.begin(), grow.end()), grow.end());
@@ -265,9 +225,9 @@ class SurfaceBuilder {
   }
 
   // Keeps the cubes grown into a hole only where the hole closed: a face-connected
-  // cluster of grown cubes that still carries a boundary edge is given up, since
+  // cluster of grown cubes that still carries an open edge is given up, since
   // the surface it added would only be a lip around a hole that stays.
-  std::size_t give_up_open_growth(const TriangleMesh& mesh, const std::vector<std::int32_t>& triangle_cube) {
+  std::size_t give_up_open_growth(const CubeNodes& leaves) {
     std::vector<std::int32_t> grown;
     for (std::size_t c = 0; c < cube_keys_.size(); ++c)
       if (grown_[c]) grown.push_back(std::int32_t(c));
@@ -275,28 +235,12 @@ class SurfaceBuilder {
     UnionFind clusters(cube_keys_.size());
     for (std::int32_t c : grown)
       for (int axis = 0; axis < 3; ++axis) {
-        const std::int32_t n = cube_index_.find(cube_keys_[c] + kAxisStep[axis]);
+        const std::int32_t n = neighbour(c, axis * 2 + 1);
         if (n >= 0 && grown_[n]) clusters.unite(c, n);
       }
-    // Boundary edges: count each undirected edge's uses.
-    std::vector<std::pair<std::uint64_t, std::int32_t>> edges;
-    edges.reserve(mesh.triangles.size() * 3);
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k) {
-        std::uint64_t a = std::uint32_t(mesh.triangles[t][k]), b = std::uint32_t(mesh.triangles[t][(k + 1) % 3]);
-        edges.push_back({std::min(a, b) << 32 | std::max(a, b), std::int32_t(t)});
-      }
-    std::sort(edges.begin(), edges.end());
     std::vector<std::uint8_t> open(cube_keys_.size(), 0);
-    for (std::size_t i = 0; i < edges.size();) {
-      std::size_t j = i;
-      while (j < edges.size() && edges[j].first == edges[i].first) ++j;
-      if (j - i == 1) {
-        const std::int32_t c = triangle_cube[edges[i].second];
-        if (grown_[c]) open[clusters.find(c)] = 1;
-      }
-      i = j;
-    }
+    for (const OpenEdge& e : open_edges(leaves))
+      if (grown_[e.cube]) open[clusters.find(e.cube)] = 1;
     std::size_t given_up = 0;
     for (std::int32_t c : grown)
       if (open[clusters.find(c)]) usable_[c] = 0, grown_[c] = 0, ++given_up;
@@ -304,6 +248,59 @@ class SurfaceBuilder {
   }
 
  private:
+  struct OpenEdge {
+    std::int32_t a, b;  // mesh vertices
+    std::int32_t cube;
+    int face;           // axis * 2 + side
+  };
+
+  // Edges of the surface used by one triangle, found cube by cube: a triangle
+  // edge on a cube face is open when the cube across that face emits nothing
+  // (two cubes sharing a face always join its crossings the same way).
+  std::vector<OpenEdge> open_edges(const CubeNodes& leaves) const {
+    static const auto face_of = [] {
+      std::array<std::array<std::int8_t, 12>, 12> f{};
+      for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j) f[i][j] = std::int8_t(i == j ? -1 : shared_face(i, j));
+      return f;
+    }();
+    const auto& table = cube_cases();
+    std::vector<OpenEdge> open;
+    for (std::size_t l = 0; l < leaves.size(); ++l) {
+      const CubeCase& cc = table[leaves.cases[l]];
+      const std::int32_t cube = leaf_cube_[l];
+      for (int t = 0; t < cc.triangle_count; ++t) {
+        if (!(leaves.triangle_masks[l] >> t & 1)) continue;
+        for (int k = 0; k < 3; ++k) {
+          const int e0 = cc.triangles[t][k], e1 = cc.triangles[t][(k + 1) % 3];
+          const int face = face_of[e0][e1];
+          if (face < 0) continue;
+          const std::int32_t n = neighbour(cube, face);
+          if (n >= 0 && emitting_[n]) continue;
+          open.push_back({leaves.edge_vertices[l][e0], leaves.edge_vertices[l][e1], cube, face});
+        }
+      }
+    }
+    return open;
+  }
+
+  // The key of the cube across a face; false when that is outside the grid.
+  bool neighbour_key(std::int32_t c, int face, std::uint64_t* key) const {
+    const int axis = face / 2, side = face % 2;
+    int xyz[3];
+    unpack_key(cube_keys_[c], &xyz[0], &xyz[1], &xyz[2]);
+    const int n = xyz[axis] + (side ? 1 : -1);
+    if (n < 0 || n >= grid_.resolution) return false;
+    *key = side ? cube_keys_[c] + kAxisStep[axis] : cube_keys_[c] - kAxisStep[axis];
+    return true;
+  }
+
+  // The cube across a face, or -1 when it is outside the grid or not yet known.
+  std::int32_t neighbour(std::int32_t c, int face) const {
+    std::uint64_t key;
+    return neighbour_key(c, face, &key) ? cube_index_.find(key) : -1;
+  }
+
   void add_seed_cubes() {
     const int R = grid_.resolution;
     std::vector<std::uint64_t> seeds(points_.size());
@@ -474,6 +471,8 @@ class SurfaceBuilder {
   std::vector<std::int32_t> corner_nearest_;
   std::vector<std::uint8_t> corner_relaxed_;
   std::vector<std::uint8_t> grown_;  // added by hole closing
+  std::vector<std::int32_t> leaf_cube_;  // of the last emission
+  std::vector<std::uint8_t> emitting_;   // of the last emission, per cube
 };
 
 }  // namespace
@@ -497,16 +496,26 @@ Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOption
   Reconstruction result;
   ReconstructStats& stats = result.stats;
   stats.points = points.size();
+  using clock = std::chrono::steady_clock;
+  auto lap = [t = clock::now()]() mutable {
+    const auto now = clock::now();
+    const double s = std::chrono::duration<double>(now - t).count();
+    t = now;
+    return s;
+  };
   SurfaceBuilder builder(points, options);
+  stats.seconds_index = lap();
   const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
   {
     Progress progress("signed distances", points.size());
     stats.following_rounds = builder.follow_surface(progress);
   }
+  stats.seconds_distances = lap();
   TriangleMesh& mesh = result.mesh;
   std::vector<std::int32_t> triangle_cube;
   std::vector<std::uint8_t> triangle_slot;
   builder.emit(&result.leaves, &mesh, &triangle_cube, &triangle_slot);
+  stats.seconds_emit = lap();
   auto drop_pieces = [&] {
     if (options.min_piece <= 0.0) return;
     const std::size_t dropped = builder.drop_small_pieces(mesh, triangle_cube, triangle_slot, options.min_piece);
@@ -517,15 +526,16 @@ Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOption
   if (options.max_hole > 0.0) {
     const std::size_t max_edges = std::size_t(options.max_hole * options.resolution);
     for (int round = 0; round < options.hole_rounds; ++round) {
-      const std::size_t grown = builder.grow_into_small_holes(mesh, triangle_cube, result.leaves, max_edges);
+      const std::size_t grown = builder.grow_into_small_holes(result.leaves, mesh.positions.size(), max_edges);
       if (grown == 0) break;
       builder.emit(&result.leaves, &mesh, &triangle_cube, &triangle_slot);
     }
-    if (builder.give_up_open_growth(mesh, triangle_cube) > 0)
+    if (builder.give_up_open_growth(result.leaves) > 0)
       builder.emit(&result.leaves, &mesh, &triangle_cube, &triangle_slot);
     stats.cubes_hole_closing = builder.grown_cubes();
     drop_pieces();
   }
+  stats.seconds_cleanup = lap();
   stats.cubes_touched = builder.usable_cubes();
   stats.corners_evaluated = builder.corner_count();
   stats.cubes_emitting = result.leaves.size();
@@ -554,6 +564,7 @@ Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOption
         mesh.colors[v][ch] = std::uint8_t(std::clamp(sum[ch] / wsum + 0.5f, 0.f, 255.f));
     }
   }
+  stats.seconds_attributes = lap();
   return result;
 }
 

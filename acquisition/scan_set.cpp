@@ -1,0 +1,91 @@
+#include "acquisition/scan_set.h"
+
+#include "acquisition/organized_pcd.h"
+#include "acquisition/range_grid_ply.h"
+#include "core/error.h"
+#include "core/progress.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <set>
+
+namespace scan2lod {
+
+std::vector<PlacedScan> read_scan_set(const std::vector<std::string>& inputs, int threads) {
+  namespace fs = std::filesystem;
+  struct Job {
+    std::string file;
+    ScanPose pose;
+    bool pcd;
+  };
+  std::vector<Job> jobs;
+  for (const std::string& input : inputs) {
+    std::string ext = fs::path(input).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext == ".conf") {
+      for (ConfEntry& e : read_conf(input)) jobs.push_back({e.file, e.pose, false});
+    } else if (ext == ".ply" || ext == ".pcd") {
+      jobs.push_back({input, ScanPose{}, ext == ".pcd"});
+    } else {
+      throw InputError(input, "not a scan: expected a .conf, a range-grid .ply or an organized .pcd");
+    }
+  }
+  if (jobs.empty()) throw InputError("", "no scans given");
+  std::vector<PlacedScan> scans(jobs.size());
+  std::vector<std::exception_ptr> errors(jobs.size());
+  Progress progress("reading scans", jobs.size());
+#pragma omp parallel for schedule(dynamic) num_threads(threads > 0 ? threads : omp_get_max_threads())
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    try {
+      if (jobs[i].pcd) {
+        scans[i].image = read_organized_pcd(jobs[i].file, &scans[i].pose);
+      } else {
+        scans[i].image = read_range_grid_ply(jobs[i].file);
+        scans[i].pose = jobs[i].pose;
+      }
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+    progress.advance();
+  }
+  progress.finish();
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
+  return scans;
+}
+
+void write_scan_set(const std::string& dir, const std::vector<PlacedScan>& scans,
+                    const std::string& conf_name) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw InputError(dir, "cannot create the output folder: " + ec.message());
+  std::vector<ConfEntry> entries;
+  std::set<std::string> used;
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    std::string stem = fs::path(scans[i].image.source).stem().string();
+    // The .conf is whitespace-separated: keep names to a safe alphabet.
+    for (char& ch : stem)
+      if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_' && ch != '.') ch = '_';
+    if (stem.empty()) {
+      char name[32];
+      std::snprintf(name, sizeof name, "scan_%03zu", i);
+      stem = name;
+    }
+    std::string name = stem + ".ply";
+    for (int k = 2; used.count(name); ++k) name = stem + "_" + std::to_string(k) + ".ply";
+    used.insert(name);
+    const std::string file = (fs::path(dir) / name).string();
+    write_range_grid_ply(file, scans[i].image);
+    entries.push_back({file, scans[i].pose});
+  }
+  write_conf((fs::path(dir) / conf_name).string(), entries);
+}
+
+}  // namespace scan2lod

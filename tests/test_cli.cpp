@@ -1,0 +1,104 @@
+// The command line: bad input gets a clear error, a non-zero exit and no
+// output file; good input gets a one-line summary and the file.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int status;
+  std::string output;  // stdout and stderr
+};
+
+CliRun run(const std::string& args) {
+  const std::string command = std::string(SCAN2LOD_CLI) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  CliRun r{-1, ""};
+  if (!pipe) return r;
+  std::array<char, 4096> buffer;
+  std::size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
+  r.status = pclose(pipe);
+  return r;
+}
+
+fs::path scratch() {
+  fs::path dir = fs::temp_directory_path() / ("scan2lod_cli_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+bool folder_has_only(const fs::path& dir, std::size_t count) {
+  return std::size_t(std::distance(fs::directory_iterator(dir), fs::directory_iterator())) == count;
+}
+
+const std::string kScans = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf";
+
+}  // namespace
+
+TEST(Cli, ReconstructsTheBundledBunnyWithASummary) {
+  const fs::path out = scratch() / "bunny.ply";
+  CliRun r = run("reconstruct " + kScans + " -o " + out.string() + " --resolution 64");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("358808 points"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("triangles"), std::string::npos);
+  // Piped: no progress bar drawn.
+  EXPECT_EQ(r.output.find('\r'), std::string::npos);
+  EXPECT_GT(fs::file_size(out), 100000u);
+}
+
+TEST(Cli, BadInputsFailCleanlyAndWriteNothing) {
+  const fs::path dir = scratch() / "bad";
+  fs::create_directories(dir);
+  const fs::path out = dir / "out.ply";
+  std::ofstream(dir / "garbled.ply") << "ply\nformat ascii 1.0\nobj_info num_cols 2\nobj_info num_rows 1\n"
+                                        "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                                        "element range_grid 2\nproperty list uchar int vertex_indices\n"
+                                        "end_header\n0 0 0\n1 zero 0\n1 0\n1 1\n";
+  std::ofstream(dir / "missing.conf") << "bmesh nowhere.ply 0 0 0 0 0 0 1\n";
+  std::ofstream(dir / "flat.off") << "OFF\n3 1 0\n0 0 0\n0 0 0\n0 0 0\n3 0 1 2\n";
+  std::ofstream(dir / "nan.off") << "OFF\n3 1 0\n0 0 0\nnan 1 0\n0 1 0\n3 0 1 2\n";
+  struct Case {
+    std::string args, expect;
+  };
+  const std::vector<Case> cases = {
+      {(dir / "garbled.ply").string(), "vertex 1"},
+      {(dir / "missing.conf").string(), "nowhere.ply"},
+      {(dir / "nan.off").string(), "nan.off"},
+      {(dir / "flat.off").string(), "flat.off"},
+      {(dir / "absent.ply").string(), "absent.ply"},
+      {kScans + " --resolution 100", "power of two"},
+      {kScans + " --resolution 0", "power of two"},
+      {kScans + " --distance magic", "distance method"},
+  };
+  for (const Case& c : cases) {
+    CliRun r = run("reconstruct " + c.args + " -o " + out.string() + " -q");
+    EXPECT_NE(r.status, 0) << c.args;
+    EXPECT_NE(r.output.find("error"), std::string::npos) << c.args << ": " << r.output;
+    EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << ": " << r.output;
+    EXPECT_EQ(r.output.find("Segmentation"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out)) << c.args;
+    EXPECT_TRUE(folder_has_only(dir, 4)) << "a temporary file was left behind by " << c.args;
+  }
+  // An output format nobody can write is refused before any work is lost.
+  CliRun r = run("reconstruct " + kScans + " -o " + (dir / "out.xyz").string() + " -r 16 -q");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find(".xyz"), std::string::npos) << r.output;
+  EXPECT_TRUE(folder_has_only(dir, 4));
+}
+
+TEST(Cli, ConvertWritesABinaryScanSet) {
+  const fs::path dir = scratch() / "converted";
+  CliRun r = run("convert " + kScans + " -o " + dir.string() + " --conf bun.conf");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("10 scans"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "bun.conf"));
+  EXPECT_TRUE(fs::exists(dir / "ear_back.ply"));
+}
