@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian 12 machine:
+#   scripts/build.sh demo   install what is missing, build, reconstruct the bundled bunny
+#   scripts/build.sh test   the same, then run the test suite
+#   scripts/build.sh deps   only install the packages
+# BUILD_DIR (default build) and JOBS (default nproc) can be set in the environment.
+set -euo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$here"
+build_dir="${BUILD_DIR:-build}"
+jobs="${JOBS:-$(nproc)}"
+
+# Everything comes from Debian's archive (see ../shared/ENVIRONMENT.md).
+packages=(
+  build-essential cmake pkg-config
+  libeigen3-dev liblz4-dev
+  libpcl-dev libopen3d-dev libopenmesh-dev libflann-dev libvtk9-dev
+  libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
+  xvfb xauth libgl1-mesa-dri
+)
+
+install_deps() {
+  local missing=()
+  for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -eq 0 ]; then
+    echo "scan2lod: all ${#packages[@]} packages present"
+    return
+  fi
+  echo "scan2lod: installing ${missing[*]}"
+  local sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+build() {
+  cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >/dev/null
+  cmake --build "$build_dir" -j "$jobs"
+}
+
+demo() {
+  mkdir -p out
+  "$build_dir/bin/scan2lod" reconstruct data/bunny/bun.conf -o out/bunny.ply --resolution 256
+  local reference=../shared/data/bunny/reconstruction/bun_zipper.ply
+  if [ -f "$reference" ]; then
+    "$build_dir/bin/scan2lod" compare out/bunny.ply "$reference"
+  fi
+}
+
+run_tests() {
+  # Tests render with VTK; give them a display when there is none.
+  local xvfb=()
+  if [ -z "${DISPLAY:-}" ] && command -v xvfb-run >/dev/null; then xvfb=(xvfb-run -a); fi
+  (cd "$build_dir" && "${xvfb[@]}" ctest --output-on-failure -j "$jobs")
+}
+
+case "${1:-demo}" in
+  deps) install_deps ;;
+  demo) install_deps; build; demo ;;
+  test) install_deps; build; demo; run_tests ;;
+  *) echo "usage: scripts/build.sh [demo|test|deps]" >&2; exit 2 ;;
+esac
