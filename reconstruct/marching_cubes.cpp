@@ -200,9 +200,19 @@ class SurfaceBuilder {
     for (const OpenEdge& e : open) loops.unite(e.a, e.b);
     std::vector<std::int32_t> loop_edges(vertex_count, 0);
     for (const OpenEdge& e : open) ++loop_edges[loops.find(e.a)];
+    // Each hole keeps one id across rounds: a loop inherits the ids of the grown
+    // cubes on its rim, and ids that meet in one loop are merged.
+    std::vector<std::int32_t> loop_hole(vertex_count, -1);
+    for (const OpenEdge& e : open) {
+      const std::int32_t root = loops.find(e.a);
+      if (std::size_t(loop_edges[root]) > max_edges) continue;
+      if (loop_hole[root] < 0) loop_hole[root] = new_hole();
+      if (hole_of_[e.cube] >= 0) unite_holes(loop_hole[root], hole_of_[e.cube]);
+    }
     std::vector<std::int32_t> grow;
     for (const OpenEdge& e : open) {
-      if (std::size_t(loop_edges[loops.find(e.a)]) > max_edges) continue;
+      const std::int32_t root = loops.find(e.a);
+      if (loop_hole[root] < 0) continue;
       std::uint64_t key;
       if (!neighbour_key(e.cube, e.face, &key)) continue;
       std::int32_t id = cube_index_.find(key);
@@ -212,7 +222,9 @@ class SurfaceBuilder {
         usable_[id] = 0;
       }
       std::uint8_t mask;
-      if (id >= 0 && !grown_[id] && (!usable_[id] || !cube_case(std::size_t(id), &mask))) grow.push_back(id);
+      if (grown_[id] || (usable_[id] && cube_case(std::size_t(id), &mask))) continue;
+      grow.push_back(id);
+      hole_of_[id] = loop_hole[root];
     }
     std::sort(grow.begin(), grow.end());
     grow.erase(std::unique(grow.begin(), grow.end()), grow.end());
@@ -224,30 +236,33 @@ class SurfaceBuilder {
     return grow.size();
   }
 
-  // Keeps the cubes grown into a hole only where the hole closed: a face-connected
-  // cluster of grown cubes that still carries an open edge is given up, since
-  // the surface it added would only be a lip around a hole that stays.
+  // Keeps the cubes grown into a hole only where the hole closed: the cubes of a
+  // hole that still has an open edge are given up, since the surface they added
+  // would only be a lip around a hole that stays.
   std::size_t give_up_open_growth(const CubeNodes& leaves) {
-    std::vector<std::int32_t> grown;
-    for (std::size_t c = 0; c < cube_keys_.size(); ++c)
-      if (grown_[c]) grown.push_back(std::int32_t(c));
-    if (grown.empty()) return 0;
-    UnionFind clusters(cube_keys_.size());
-    for (std::int32_t c : grown)
-      for (int axis = 0; axis < 3; ++axis) {
-        const std::int32_t n = neighbour(c, axis * 2 + 1);
-        if (n >= 0 && grown_[n]) clusters.unite(c, n);
-      }
-    std::vector<std::uint8_t> open(cube_keys_.size(), 0);
-    for (const OpenEdge& e : open_edges(leaves))
-      if (grown_[e.cube]) open[clusters.find(e.cube)] = 1;
+    std::vector<std::uint8_t> open(hole_parent_.size(), 0);
+    for (const OpenEdge& e : open_edges(leaves)) {
+      if (hole_of_[e.cube] >= 0) open[find_hole(hole_of_[e.cube])] = 1;
+      const std::int32_t n = neighbour(e.cube, e.face);
+      if (n >= 0 && hole_of_[n] >= 0) open[find_hole(hole_of_[n])] = 1;
+    }
     std::size_t given_up = 0;
-    for (std::int32_t c : grown)
-      if (open[clusters.find(c)]) usable_[c] = 0, grown_[c] = 0, ++given_up;
+    for (std::size_t c = 0; c < cube_keys_.size(); ++c)
+      if (grown_[c] && open[find_hole(hole_of_[c])]) usable_[c] = 0, grown_[c] = 0, ++given_up;
     return given_up;
   }
 
  private:
+  std::int32_t new_hole() {
+    hole_parent_.push_back(std::int32_t(hole_parent_.size()));
+    return hole_parent_.back();
+  }
+  std::int32_t find_hole(std::int32_t h) {
+    while (hole_parent_[h] != h) h = hole_parent_[h] = hole_parent_[hole_parent_[h]];
+    return h;
+  }
+  void unite_holes(std::int32_t a, std::int32_t b) { hole_parent_[find_hole(a)] = find_hole(b); }
+
   struct OpenEdge {
     std::int32_t a, b;  // mesh vertices
     std::int32_t cube;
@@ -335,6 +350,7 @@ class SurfaceBuilder {
     cube_keys_.push_back(key);
     usable_.push_back(1);
     grown_.push_back(0);
+    hole_of_.push_back(-1);
     masks_.push_back(0xffff);
     cube_corners_.emplace_back();
     cube_corners_.back().fill(-1);
@@ -471,6 +487,8 @@ class SurfaceBuilder {
   std::vector<std::int32_t> corner_nearest_;
   std::vector<std::uint8_t> corner_relaxed_;
   std::vector<std::uint8_t> grown_;  // added by hole closing
+  std::vector<std::int32_t> hole_of_;      // per cube: the hole it was grown into, or -1
+  std::vector<std::int32_t> hole_parent_;  // union-find over hole ids
   std::vector<std::int32_t> leaf_cube_;  // of the last emission
   std::vector<std::uint8_t> emitting_;   // of the last emission, per cube
 };

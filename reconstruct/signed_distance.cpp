@@ -9,6 +9,9 @@
 #include <limits>
 
 namespace scan2lod {
+namespace {
+constexpr std::size_t kParallelMinimum = 8192;
+}  // namespace
 
 DistanceMethod parse_distance_method(const std::string& name) {
   if (name == "seed") return DistanceMethod::seed;
@@ -50,7 +53,8 @@ void PointIndex::knn(const Vec3f* queries, std::size_t count, int k, std::int32_
   flann::Matrix<int> idx(indices, count, std::size_t(k));
   flann::Matrix<float> dist(squared_distances, count, std::size_t(k));
   flann::SearchParams params;
-  params.cores = threads > 0 ? threads : omp_get_max_threads();
+  // Small batches (late surface-following rounds) are not worth waking threads.
+  params.cores = count < kParallelMinimum ? 1 : threads > 0 ? threads : omp_get_max_threads();
   params.sorted = true;
   impl_->index.knnSearch(q, idx, dist, std::size_t(k), params);
 }
@@ -70,7 +74,7 @@ void signed_distances(const OrientedPoints& points, const PointIndex& index,
   nearest->assign(n, -1);
   const bool have_spacing = points.spacing.size() == points.size();
   const bool have_confidence = points.confidence.size() == points.size();
-  const int nthreads = threads > 0 ? threads : omp_get_max_threads();
+  const int nthreads = n < kParallelMinimum ? 1 : threads > 0 ? threads : omp_get_max_threads();
 #pragma omp parallel for schedule(static) num_threads(nthreads)
   for (std::size_t i = 0; i < n; ++i) {
     const std::int32_t* id = &idx[i * k];
