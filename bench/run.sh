@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Runs the reconstruction benchmark from an existing build and prints its
+# markdown report (progress goes to stderr). Builds nothing.
+#
+#   bench/run.sh [--build DIR] [--write] [benchmark options...]
+#
+#   --build DIR  build directory holding bin/scan2lod_bench_reconstruct
+#                (default: $SCAN2LOD_BUILD_DIR, else <repo>/build)
+#   --write      write the report to bench/REPORT.md instead of stdout
+#   anything else goes to the benchmark: --quick, --pcl-256, --pcl-timeout S,
+#   --runs N, --input FILE, --reference FILE, --samples N (see --help)
+#
+# Examples:
+#   bench/run.sh --build build-bench --quick          # ~20 s end-to-end check
+#   bench/run.sh --build build-bench --write          # R=128 and 256, PCL at 128 (~2 min)
+#   bench/run.sh --build build-bench --write --pcl-256  # adds PCL at 256 (~9 min more)
+set -euo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+repo="$(dirname "$here")"
+build="${SCAN2LOD_BUILD_DIR:-$repo/build}"
+write=0
+args=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --build) build="$2"; shift 2 ;;
+    --write) write=1; shift ;;
+    *) args+=("$1"); shift ;;
+  esac
+done
+
+binary="$build/bin/scan2lod_bench_reconstruct"
+if [[ ! -x "$binary" ]]; then
+  echo "run.sh: no benchmark binary at $binary" >&2
+  echo "  build it first: cmake -S $repo -B $build -DCMAKE_BUILD_TYPE=Release &&" \
+       "make -C $build scan2lod_bench_reconstruct" >&2
+  exit 1
+fi
+
+if [[ $write -eq 1 ]]; then
+  # Through a temporary file, so a failed or interrupted run keeps the old report.
+  tmp="$(mktemp "$here/.REPORT.md.XXXXXX")"
+  trap 'rm -f "$tmp"' EXIT
+  "$binary" "${args[@]}" > "$tmp"
+  mv "$tmp" "$here/REPORT.md"
+  trap - EXIT
+  echo "run.sh: wrote $here/REPORT.md" >&2
+else
+  exec "$binary" "${args[@]}"
+fi
