@@ -4,6 +4,7 @@
 #include "core/flat_hash.h"
 #include "core/progress.h"
 #include "reconstruct/cube_table.h"
+#include "reconstruct/hole_filling.h"
 
 #include <omp.h>
 
@@ -552,6 +553,11 @@ Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOption
       builder.emit(&result.leaves, &mesh, &triangle_cube, &triangle_slot);
     stats.cubes_hole_closing = builder.grown_cubes();
     drop_pieces();
+    // What marching on could not close gets triangles over its rim.
+    const std::vector<Triangle> patch = fill_small_holes(mesh, max_edges);
+    result.leaves.patch_triangles = patch;
+    mesh.triangles.insert(mesh.triangles.end(), patch.begin(), patch.end());
+    stats.patch_triangles = patch.size();
   }
   stats.seconds_cleanup = lap();
   stats.cubes_touched = builder.usable_cubes();

@@ -5,8 +5,8 @@
 // Only cubes near data are touched: cubes that hold points (grown by `margin`),
 // then, following the surface, any neighbour across a face that the surface
 // crosses. Time and memory follow the surface area, not R^3. Afterwards small
-// detached pieces are removed and small holes closed, both cube by cube, so the
-// mesh stays exactly the marching cubes of the kept leaf cubes.
+// detached pieces are removed and small holes closed cube by cube; holes that
+// marching cubes cannot close get rim triangles (CubeNodes::patch_triangles).
 #pragma once
 
 #include "core/types.h"
@@ -55,6 +55,10 @@ struct CubeNodes {
   std::vector<float> corner_distances;     // signed distance (never NaN for emitting cubes)
   std::vector<Rgb> corner_colors;          // empty without colour input
 
+  // Triangles that close small holes over existing vertices (hole_filling.h),
+  // appended to the mesh after the cubes' triangles.
+  std::vector<Triangle> patch_triangles;
+
   std::size_t size() const { return cube_keys.size(); }
 };
 
@@ -66,6 +70,7 @@ struct ReconstructStats {
   std::size_t following_rounds = 0;   // surface-following passes after the seed cubes
   std::size_t triangles_dropped = 0;  // triangles of pieces under min_piece
   std::size_t cubes_hole_closing = 0; // cubes added to close small holes
+  std::size_t patch_triangles = 0;    // triangles over the rims of holes cubes could not close
   // Wall-clock seconds per stage.
   double seconds_index = 0, seconds_distances = 0, seconds_emit = 0, seconds_cleanup = 0,
          seconds_attributes = 0;

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 
 using namespace scan2lod;
@@ -48,15 +49,30 @@ TEST(Bunny, MeanSurfaceDistanceIsUnderThreeHundredthsOfAPercent) {
   EXPECT_LT(c.a_to_b.p95, 0.001 * c.diagonal);
 }
 
-TEST(Bunny, OnePieceAndNoSpuriousComponents) {
+TEST(Bunny, OnePieceAndNoHolesButTheDatasOwn) {
   if (!std::filesystem::exists(kReference)) GTEST_SKIP() << "needs ../shared";
   const MeshTopology& t = bunny_run().c.a;
   EXPECT_EQ(t.components, 1u);
+  // The reference has the scans' own holes under the base (5 loops).
+  EXPECT_LE(t.boundary_loops, bunny_run().c.b.boundary_loops + 5);
   EXPECT_EQ(t.non_manifold_edges, 0u);
   EXPECT_EQ(t.degenerate_triangles, 0u);
   // Marching cubes at R = 256 over the bunny's ~0.057 m^2.
   EXPECT_GT(t.triangles, 350000u);
   EXPECT_LT(t.triangles, 500000u);
+}
+
+TEST(Bunny, TrianglesAreConsistentlyOriented) {
+  if (!std::filesystem::exists(kReference)) GTEST_SKIP() << "needs ../shared";
+  // No directed edge twice: neighbours agree on orientation, patches included.
+  const TriangleMesh& m = bunny_run().r.mesh;
+  std::vector<std::uint64_t> directed;
+  for (const Triangle& t : m.triangles)
+    for (int k = 0; k < 3; ++k)
+      directed.push_back(std::uint64_t(std::uint32_t(t[k])) << 32 | std::uint32_t(t[(k + 1) % 3]));
+  std::sort(directed.begin(), directed.end());
+  EXPECT_EQ(std::adjacent_find(directed.begin(), directed.end()), directed.end());
+  EXPECT_GT(bunny_run().r.stats.patch_triangles, 0u);
 }
 
 TEST(Bunny, LeafCubeNodesDescribeTheMesh) {

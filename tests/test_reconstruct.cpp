@@ -1,6 +1,7 @@
 // Claims of seed 003 §4.2 on shapes with known answers.
 #include "measure/topology.h"
 #include "reconstruct/cube_table.h"
+#include "reconstruct/hole_filling.h"
 #include "reconstruct/marching_cubes.h"
 
 #include <gtest/gtest.h>
@@ -188,4 +189,38 @@ TEST(Reconstruct, RejectsBadPoints) {
   ReconstructOptions bad;
   bad.resolution = 100;
   EXPECT_THROW(reconstruct(sphere_points(1.f, 100), bad), std::runtime_error);
+}
+
+TEST(HoleFilling, ClosesSmallHolesKeepsLargeOnesAndOrientsPatches) {
+  // A marching-cubes sphere with two holes cut out: a small cap and a big band.
+  ReconstructOptions options;
+  options.resolution = 32;
+  Reconstruction r = reconstruct(sphere_points(1.f, 60000), options);
+  TriangleMesh mesh;
+  mesh.positions = r.mesh.positions;
+  for (const Triangle& t : r.mesh.triangles) {
+    const Vec3f c = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3.f;
+    if (c.z() > 0.93f) continue;               // small cap: ~20 rim edges
+    if (std::abs(c.z()) < 0.08f) continue;     // the equator band: two long rims
+    mesh.triangles.push_back(t);
+  }
+  const MeshTopology before = mesh_topology(mesh);
+  ASSERT_EQ(before.boundary_loops, 3u);
+  const std::vector<Triangle> patch = fill_small_holes(mesh, 60);
+  ASSERT_FALSE(patch.empty());
+  mesh.triangles.insert(mesh.triangles.end(), patch.begin(), patch.end());
+  const MeshTopology after = mesh_topology(mesh);
+  EXPECT_EQ(after.boundary_loops, 2u);  // the band's rims are longer than 60 edges
+  EXPECT_EQ(after.non_manifold_edges, 0u);
+  EXPECT_EQ(after.degenerate_triangles, 0u);
+  // Consistent orientation: no directed edge is used twice.
+  std::map<std::pair<int, int>, int> directed;
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) ASSERT_EQ((directed[std::make_pair(t[k], t[(k + 1) % 3])]++), 0);
+  // The patch lies over the cap, facing outward.
+  for (const Triangle& t : patch) {
+    const Vec3f& a = mesh.positions[t[0]];
+    const Vec3f n = (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a);
+    EXPECT_GT(n.z(), 0.f);
+  }
 }

@@ -1,0 +1,98 @@
+#include "reconstruct/hole_filling.h"
+
+#include <algorithm>
+#include <limits>
+#include <unordered_set>
+
+namespace scan2lod {
+namespace {
+
+std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
+  return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
+}
+
+// Minimum-area triangulation of the polygon loop[0..n) (dynamic programming
+// over polygon triangulations, O(n^3)). Triangles are written reversed to the
+// loop, which runs along the existing triangles' half-edges.
+bool triangulate(const TriangleMesh& mesh, const std::vector<std::int32_t>& loop,
+                 const std::unordered_set<std::uint64_t>& edges, std::vector<Triangle>* out) {
+  const int n = int(loop.size());
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<double> cost(std::size_t(n) * n, kInf);
+  std::vector<int> split(std::size_t(n) * n, -1);
+  auto at = [n](int i, int j) { return std::size_t(i) * n + j; };
+  auto area = [&](int i, int k, int j) {
+    const Vec3f& a = mesh.positions[loop[i]];
+    return 0.5 * double((mesh.positions[loop[k]] - a).cross(mesh.positions[loop[j]] - a).norm());
+  };
+  for (int i = 0; i + 1 < n; ++i) cost[at(i, i + 1)] = 0.0;
+  for (int gap = 2; gap < n; ++gap)
+    for (int i = 0; i + gap < n; ++i) {
+      const int j = i + gap;
+      // A diagonal that is already an edge of the mesh would get a third triangle.
+      if (!(i == 0 && j == n - 1) && edges.count(edge_key(loop[i], loop[j]))) continue;
+      for (int k = i + 1; k < j; ++k) {
+        const double c = cost[at(i, k)] + cost[at(k, j)] + area(i, k, j);
+        if (c < cost[at(i, j)]) cost[at(i, j)] = c, split[at(i, j)] = k;
+      }
+    }
+  if (!(cost[at(0, n - 1)] < kInf)) return false;
+  std::vector<std::pair<int, int>> stack = {{0, n - 1}};
+  while (!stack.empty()) {
+    auto [i, j] = stack.back();
+    stack.pop_back();
+    if (j - i < 2) continue;
+    const int k = split[at(i, j)];
+    out->push_back({loop[i], loop[j], loop[k]});
+    stack.push_back({i, k});
+    stack.push_back({k, j});
+  }
+  return true;
+}
+
+}  // namespace
+
+std::vector<Triangle> fill_small_holes(const TriangleMesh& mesh, std::size_t max_edges) {
+  // Boundary half-edges: a -> b used by one triangle, in its orientation.
+  std::vector<std::pair<std::uint64_t, std::pair<std::int32_t, std::int32_t>>> half;
+  half.reserve(mesh.triangles.size() * 3);
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) half.push_back({edge_key(t[k], t[(k + 1) % 3]), {t[k], t[(k + 1) % 3]}});
+  std::sort(half.begin(), half.end(),
+            [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::vector<std::int32_t> next(mesh.positions.size(), -1);
+  std::vector<std::uint8_t> pinched(mesh.positions.size(), 0);
+  std::unordered_set<std::uint64_t> edges;
+  edges.reserve(half.size());
+  for (std::size_t i = 0; i < half.size();) {
+    std::size_t j = i;
+    while (j < half.size() && half[j].first == half[i].first) ++j;
+    edges.insert(half[i].first);
+    if (j - i == 1) {
+      const auto [a, b] = half[i].second;
+      if (next[a] >= 0) pinched[a] = 1;  // two boundary edges leave a: ambiguous loop
+      next[a] = b;
+    }
+    i = j;
+  }
+  std::vector<Triangle> patch;
+  std::vector<std::uint8_t> seen(mesh.positions.size(), 0);
+  std::vector<std::int32_t> loop;
+  for (std::size_t start = 0; start < next.size(); ++start) {
+    if (next[start] < 0 || seen[start]) continue;
+    loop.clear();
+    bool usable = true;
+    std::int32_t v = std::int32_t(start);
+    while (v >= 0 && !seen[v]) {
+      seen[v] = 1;
+      usable &= !pinched[v];
+      loop.push_back(v);
+      v = next[v];
+    }
+    if (v != std::int32_t(start) || !usable || loop.size() < 3 || loop.size() > max_edges) continue;
+    triangulate(mesh, loop, edges, &patch);
+  }
+  return patch;
+}
+
+}  // namespace scan2lod
