@@ -85,3 +85,34 @@ TEST(ClosedShapes, ScannedTorusIsAClosedTorus) {
     EXPECT_LT(r.mean_error, 0.05 * r.cube) << "R=" << resolution;
   }
 }
+
+TEST(ClosedShapes, ScanColoursReachTheMeshVertices) {
+  // Red northern and blue southern hemisphere, carried from the mesh through the
+  // virtual range images and the oriented points onto the reconstruction.
+  auto sphere = open3d::geometry::TriangleMesh::CreateSphere(1.0, 100);
+  TriangleMesh mesh = from_open3d(*sphere);
+  for (const Vec3f& p : mesh.positions)
+    mesh.colors.push_back(p.z() > 0.f ? Rgb{230, 20, 20} : Rgb{20, 20, 230});
+  OrientedPoints points = scan(mesh, 14, 128);
+  ASSERT_EQ(points.colors.size(), points.size());
+  ReconstructOptions options;
+  options.resolution = 32;
+  Reconstruction r = reconstruct(points, options);
+  ASSERT_EQ(r.mesh.colors.size(), r.mesh.positions.size());
+  ASSERT_EQ(r.leaves.corner_colors.size(), r.leaves.corner_keys.size());
+  std::size_t checked = 0;
+  for (std::size_t v = 0; v < r.mesh.positions.size(); ++v) {
+    const float z = r.mesh.positions[v].z();
+    if (std::abs(z) < 0.2f) continue;  // the seam blends
+    const Rgb& c = r.mesh.colors[v];
+    if (z > 0.f) {
+      EXPECT_GT(c[0], 200);
+      EXPECT_LT(c[2], 50);
+    } else {
+      EXPECT_LT(c[0], 50);
+      EXPECT_GT(c[2], 200);
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, r.mesh.positions.size() / 2);
+}
