@@ -4,13 +4,10 @@
 #include "acquisition/organized_pcd.h"
 #include "acquisition/range_grid_ply.h"
 #include "core/error.h"
-#include "core/progress.h"
+#include "core/parallel_jobs.h"
 #include "io/mesh_file.h"
 
-#include <omp.h>
-
 #include <algorithm>
-#include <exception>
 #include <filesystem>
 #include <fstream>
 
@@ -72,30 +69,18 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
 
   // Files are independent: read and orient them in parallel, merge in order.
   std::vector<OrientedPoints> parts(jobs.size());
-  std::vector<std::exception_ptr> errors(jobs.size());
-  Progress progress("reading inputs", jobs.size());
-  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
-#pragma omp parallel for schedule(dynamic) num_threads(threads)
-  for (std::size_t i = 0; i < jobs.size(); ++i) {
-    try {
-      const Job& job = jobs[i];
-      if (job.kind == Kind::range_grid) {
-        parts[i] = range_image_to_points(read_range_grid_ply(job.file), job.pose, options.lattice);
-      } else if (job.kind == Kind::pcd) {
-        ScanPose pose;
-        RangeImage image = read_organized_pcd(job.file, &pose);
-        parts[i] = range_image_to_points(image, pose, options.lattice);
-      } else {
-        parts[i] = mesh_to_oriented_points(read_mesh(job.file));
-      }
-    } catch (...) {
-      errors[i] = std::current_exception();
+  parallel_jobs(jobs.size(), options.threads, "reading inputs", [&](std::size_t i) {
+    const Job& job = jobs[i];
+    if (job.kind == Kind::range_grid) {
+      parts[i] = range_image_to_points(read_range_grid_ply(job.file), job.pose, options.lattice);
+    } else if (job.kind == Kind::pcd) {
+      ScanPose pose;
+      RangeImage image = read_organized_pcd(job.file, &pose);
+      parts[i] = range_image_to_points(image, pose, options.lattice);
+    } else {
+      parts[i] = mesh_to_oriented_points(read_mesh(job.file));
     }
-    progress.advance();
-  }
-  progress.finish();
-  for (const auto& e : errors)
-    if (e) std::rethrow_exception(e);
+  });
 
   OrientedPoints points;
   AcquisitionReport local;

@@ -3,14 +3,11 @@
 #include "acquisition/organized_pcd.h"
 #include "acquisition/range_grid_ply.h"
 #include "core/error.h"
-#include "core/progress.h"
-
-#include <omp.h>
+#include "core/parallel_jobs.h"
 
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
-#include <exception>
 #include <filesystem>
 #include <set>
 
@@ -37,25 +34,14 @@ std::vector<PlacedScan> read_scan_set(const std::vector<std::string>& inputs, in
   }
   if (jobs.empty()) throw InputError("", "no scans given");
   std::vector<PlacedScan> scans(jobs.size());
-  std::vector<std::exception_ptr> errors(jobs.size());
-  Progress progress("reading scans", jobs.size());
-#pragma omp parallel for schedule(dynamic) num_threads(threads > 0 ? threads : omp_get_max_threads())
-  for (std::size_t i = 0; i < jobs.size(); ++i) {
-    try {
-      if (jobs[i].pcd) {
-        scans[i].image = read_organized_pcd(jobs[i].file, &scans[i].pose);
-      } else {
-        scans[i].image = read_range_grid_ply(jobs[i].file);
-        scans[i].pose = jobs[i].pose;
-      }
-    } catch (...) {
-      errors[i] = std::current_exception();
+  parallel_jobs(jobs.size(), threads, "reading scans", [&](std::size_t i) {
+    if (jobs[i].pcd) {
+      scans[i].image = read_organized_pcd(jobs[i].file, &scans[i].pose);
+    } else {
+      scans[i].image = read_range_grid_ply(jobs[i].file);
+      scans[i].pose = jobs[i].pose;
     }
-    progress.advance();
-  }
-  progress.finish();
-  for (const auto& e : errors)
-    if (e) std::rethrow_exception(e);
+  });
   return scans;
 }
 
