@@ -41,6 +41,24 @@ class FlatHashMap {
     }
   }
 
+  // Sets key -> value, inserting key if needed.
+  void assign(std::uint64_t key, std::int32_t value) {
+    assert(key != kEmpty);
+    if ((size_ + 1) * 2 > keys_.size()) rehash(keys_.size() * 2);
+    for (std::size_t i = slot(key);; i = (i + 1) & mask_) {
+      if (keys_[i] == key) {
+        values_[i] = value;
+        return;
+      }
+      if (keys_[i] == kEmpty) {
+        keys_[i] = key;
+        values_[i] = value;
+        ++size_;
+        return;
+      }
+    }
+  }
+
   void reserve(std::size_t n) {
     if (capacity_for(n) > keys_.size()) rehash(capacity_for(n));
   }

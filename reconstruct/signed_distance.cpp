@@ -112,4 +112,14 @@ void signed_distances(const OrientedPoints& points, const PointIndex& index,
   }
 }
 
+SignedDistanceField unlimited_distance_field(const OrientedPoints& points, const PointIndex& index,
+                                             const SignedDistanceOptions& options, float cube_size) {
+  SignedDistanceOptions unlimited = options;
+  unlimited.max_distance = std::numeric_limits<float>::infinity();
+  return [&points, &index, unlimited, cube_size](const std::vector<Vec3f>& q, std::vector<float>* d) {
+    std::vector<std::int32_t> nearest;
+    signed_distances(points, index, q, cube_size, unlimited, 0, d, &nearest);
+  };
+}
+
 }  // namespace scan2lod

@@ -4,6 +4,7 @@
 
 #include "core/types.h"
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -59,5 +60,19 @@ void signed_distances(const OrientedPoints& points, const PointIndex& index,
                       const std::vector<Vec3f>& queries, float cube_size,
                       const SignedDistanceOptions& options, int threads,
                       std::vector<float>* distance, std::vector<std::int32_t>* nearest);
+
+}  // namespace scan2lod
+
+namespace scan2lod {
+
+// Signed distances at the given positions (positive outside), never NaN.
+using SignedDistanceField =
+    std::function<void(const std::vector<Vec3f>& positions, std::vector<float>* distances)>;
+
+// The signed distance of `options` anywhere, without the distance limit: for
+// lattice points far from the data, such as the octree's coarse corners.
+// points and index must outlive the returned function.
+SignedDistanceField unlimited_distance_field(const OrientedPoints& points, const PointIndex& index,
+                                             const SignedDistanceOptions& options, float cube_size);
 
 }  // namespace scan2lod

@@ -1,0 +1,23 @@
+// Run-time LOD mesh generation (seed 003 §6.1-6.2): the first N entries of the
+// LOD array are expanded, and the cut below them is emitted by reference into
+// the octree's precomputed vertices and triangles. No floating-point work.
+#pragma once
+
+#include "lod/lod_array.h"
+#include "lod/mc_octree.h"
+
+#include <vector>
+
+namespace scan2lod {
+
+// Triangles (indices into tree.positions) of the mesh after `priority`
+// expansions (0: the root's, lod.full(): the full marching-cubes mesh).
+// `expanded` is scratch space of tree.size() flags, left all-zero on return.
+void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,
+                 std::vector<std::uint8_t>* expanded, std::vector<Triangle>* triangles);
+
+// A self-contained mesh of those triangles: only the vertices they use, with
+// normals and colours.
+TriangleMesh compact_lod(const McOctree& tree, const std::vector<Triangle>& triangles);
+
+}  // namespace scan2lod

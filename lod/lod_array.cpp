@@ -1,0 +1,95 @@
+#include "lod/lod_array.h"
+
+#include "core/flat_hash.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+
+namespace scan2lod {
+
+LodArray number_nodes(const McOctree& tree) {
+  const std::size_t n = tree.size();
+  std::vector<FlatHashMap> at_level(std::size_t(tree.depth) + 1);
+  for (std::size_t node = 0; node < n; ++node) at_level[tree.levels[node]].insert(tree.keys[node], std::int32_t(node));
+  // A node may expand once everything beside it on its level is covered by
+  // nodes of its level or finer: for each of the 26 cells around it, the
+  // deepest node above that cell (its parent if the cell has a node, else the
+  // ancestor whose subtree has no surface there) must have expanded. The seed's
+  // "marked or none" reads the same, with null nodes as real children.
+  std::vector<std::uint8_t> expanded(n, 0);
+  std::vector<std::int32_t> blocking(n, 0);
+  std::vector<std::vector<std::int32_t>> waiting(n);
+  using Entry = std::pair<float, std::int32_t>;
+  std::priority_queue<Entry> queue;
+  auto enter_cut = [&](std::int32_t node) {
+    if (tree.is_leaf(node)) return;
+    const int level = tree.levels[node];
+    int x, y, z;
+    unpack_key(tree.keys[node], &x, &y, &z);
+    const int side = 1 << level;
+    std::int32_t deps[26];
+    int count = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (!(dx | dy | dz)) continue;
+          const int nx = x + dx, ny = y + dy, nz = z + dz;
+          if (nx < 0 || ny < 0 || nz < 0 || nx >= side || ny >= side || nz >= side) continue;
+          for (int l = level - 1; l >= 0; --l) {
+            const int s = level - l;
+            const std::int32_t a = at_level[l].find(pack_key(std::uint64_t(nx) >> s, std::uint64_t(ny) >> s,
+                                                              std::uint64_t(nz) >> s));
+            if (a < 0) continue;
+            if (!expanded[a] && std::find(deps, deps + count, a) == deps + count) deps[count++] = a;
+            break;
+          }
+        }
+    blocking[node] = count;
+    for (int i = 0; i < count; ++i) waiting[deps[i]].push_back(node);
+    if (count == 0) queue.push({tree.metrics[node], node});
+  };
+  auto expand = [&](std::int32_t node) {
+    expanded[node] = 1;
+    for (std::int32_t w : waiting[node])
+      if (--blocking[w] == 0) queue.push({tree.metrics[w], w});
+    std::vector<std::int32_t>().swap(waiting[node]);
+  };
+
+  LodArray lod;
+  lod.order.reserve(n);
+  enter_cut(0);
+  std::int64_t triangles = tree.triangle_counts[0];
+  lod.accumulated.push_back(triangles);
+  while (!queue.empty()) {
+    const std::int32_t node = queue.top().second;
+    queue.pop();
+    lod.order.push_back(node);
+    expand(node);
+    triangles -= tree.triangle_counts[node];
+    for (int c = 0; c < tree.child_counts[node]; ++c) {
+      const std::int32_t child = tree.first_child[node] + c;
+      triangles += tree.triangle_counts[child];
+      enter_cut(child);
+    }
+    lod.accumulated.push_back(triangles);
+  }
+  // Full detail also shows the hole patches that sit between leaves.
+  lod.accumulated.back() += std::int64_t(tree.patch_triangles.size());
+  return lod;
+}
+
+std::size_t priority_for_percent(const LodArray& lod, double percent) {
+  percent = std::clamp(percent, 0.0, 100.0);
+  return std::size_t(std::llround(percent / 100.0 * double(lod.full())));
+}
+
+std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles) {
+  // The accumulated counts need not be monotone; take the last prefix that fits.
+  std::size_t best = 0;
+  for (std::size_t i = 0; i < lod.accumulated.size(); ++i)
+    if (lod.accumulated[i] <= triangles) best = i;
+  return best;
+}
+
+}  // namespace scan2lod

@@ -1,0 +1,35 @@
+// Node priority numbering (seed 003 §5.2, §5.4.3) and the accumulation table
+// (§6.1). Starting from the root, the expandable node with the largest LOD
+// metric expands next; a node is expandable once every node beside it on its
+// level (the 26 around it) exists in the current cut or has no surface. So
+// neighbouring nodes in any prefix differ by at most one level.
+#pragma once
+
+#include "lod/mc_octree.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace scan2lod {
+
+struct LodArray {
+  std::vector<std::int32_t> order;  // nodes in the order they expand; order[0] is the root
+  // accumulated[i]: triangles of the mesh after the first i expansions
+  // (accumulated[0]: the root's own), order.size() + 1 entries.
+  std::vector<std::int64_t> accumulated;
+
+  std::size_t full() const { return order.size(); }
+};
+
+// Numbers the nodes of `tree` with a priority queue: O(n log n) for n nodes.
+LodArray number_nodes(const McOctree& tree);
+
+// The priority number (count of expansions) for the first `percent` of the LOD
+// array, as in the seed's tables; percent is clamped to [0, 100].
+std::size_t priority_for_percent(const LodArray& lod, double percent);
+
+// The largest priority number whose mesh has at most `triangles` triangles,
+// through the accumulation table (at least 0).
+std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles);
+
+}  // namespace scan2lod

@@ -1,0 +1,305 @@
+#include "lod/mc_octree.h"
+
+#include "core/error.h"
+#include "core/flat_hash.h"
+#include "reconstruct/cube_table.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace scan2lod {
+namespace {
+
+constexpr std::uint64_t kAxisStep[3] = {1ull, 1ull << 20, 1ull << 40};
+
+std::uint64_t parent_key(std::uint64_t key) {
+  int x, y, z;
+  unpack_key(key, &x, &y, &z);
+  return pack_key(std::uint64_t(x) >> 1, std::uint64_t(y) >> 1, std::uint64_t(z) >> 1);
+}
+
+// Leaf-lattice key of corner c of the node with `key` on a level whose cubes
+// span 2^shift leaf cubes.
+std::uint64_t corner_lattice_key(std::uint64_t key, int shift, int c) {
+  int x, y, z;
+  unpack_key(key, &x, &y, &z);
+  const std::uint64_t size = 1ull << shift;
+  return pack_key((std::uint64_t(x) << shift) + (c & 1) * size, (std::uint64_t(y) << shift) + ((c >> 1) & 1) * size,
+                  (std::uint64_t(z) << shift) + ((c >> 2) & 1) * size);
+}
+
+double triangle_area(const std::vector<Vec3f>& p, const Triangle& t) {
+  return 0.5 * double((p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).norm());
+}
+
+// Signed distances on the leaf lattice: the leaves' own where they have them,
+// the field elsewhere, each point evaluated once.
+class LatticeDistances {
+ public:
+  LatticeDistances(const CubeNodes& leaves, const SignedDistanceField& field)
+      : grid_(leaves.grid), field_(field), index_(leaves.corner_keys.size() * 2) {
+    for (std::size_t i = 0; i < leaves.corner_keys.size(); ++i) {
+      index_.insert(leaves.corner_keys[i], std::int32_t(values_.size()));
+      values_.push_back(leaves.corner_distances[i]);
+    }
+  }
+
+  // Makes sure every key has a value (one batched field call for the new ones).
+  void ensure(const std::vector<std::uint64_t>& keys) {
+    std::vector<std::uint64_t> fresh;
+    for (std::uint64_t k : keys)
+      if (index_.find(k) == -1) index_.insert(k, -2), fresh.push_back(k);  // -2: pending
+    if (fresh.empty()) return;
+    std::vector<Vec3f> positions(fresh.size());
+    for (std::size_t i = 0; i < fresh.size(); ++i) {
+      int x, y, z;
+      unpack_key(fresh[i], &x, &y, &z);
+      positions[i] = grid_.corner_position(x, y, z);
+    }
+    std::vector<float> d;
+    field_(positions, &d);
+    for (std::size_t i = 0; i < fresh.size(); ++i) {
+      index_.assign(fresh[i], std::int32_t(values_.size()));
+      values_.push_back(std::isnan(d[i]) ? 1.f : d[i]);
+    }
+  }
+
+  float at(std::uint64_t key) const { return values_[index_.find(key)]; }
+  bool inside(std::uint64_t key) const { return at(key) < 0.f; }
+
+ private:
+  const CubeGrid& grid_;
+  const SignedDistanceField& field_;
+  FlatHashMap index_;
+  std::vector<float> values_;
+};
+
+}  // namespace
+
+McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field) {
+  if (leaves.size() == 0) throw InputError("", "no leaf cube nodes: the reconstruction is empty");
+  const int R = leaves.grid.resolution;
+  int depth = 0;
+  while ((1 << depth) < R) ++depth;
+  McOctree tree;
+  tree.grid = leaves.grid;
+  tree.depth = depth;
+  tree.positions = mesh.positions;
+  tree.normals = mesh.normals;
+  tree.colors = mesh.colors;
+  tree.mesh_vertices = mesh.positions.size();
+  tree.patch_triangles = leaves.patch_triangles;
+
+  // Keys per level, bottom-up; then ordered top-down so children are contiguous.
+  std::vector<std::vector<std::uint64_t>> level_keys(depth + 1);
+  level_keys[depth] = leaves.cube_keys;
+  std::sort(level_keys[depth].begin(), level_keys[depth].end());
+  for (int level = depth - 1; level >= 0; --level) {
+    auto& keys = level_keys[level];
+    keys.reserve(level_keys[level + 1].size() / 3 + 1);
+    for (std::uint64_t k : level_keys[level + 1]) keys.push_back(parent_key(k));
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  }
+  FlatHashMap leaf_index(leaves.size());
+  for (std::size_t l = 0; l < leaves.size(); ++l) leaf_index.insert(leaves.cube_keys[l], std::int32_t(l));
+
+  std::vector<FlatHashMap> node_index(depth + 1);
+  std::vector<std::int32_t> level_begin(depth + 2, 0);
+  auto add_node = [&](int level, std::uint64_t key, std::int32_t parent) {
+    const std::int32_t id = std::int32_t(tree.keys.size());
+    tree.keys.push_back(key);
+    tree.levels.push_back(std::uint8_t(level));
+    tree.parents.push_back(parent);
+    tree.first_child.push_back(-1);
+    tree.child_counts.push_back(0);
+    node_index[level].insert(key, id);
+  };
+  add_node(0, level_keys[0].front(), -1);
+  for (int level = 0; level < depth; ++level) {
+    level_begin[level + 1] = std::int32_t(tree.keys.size());
+    std::vector<std::pair<std::int32_t, std::uint64_t>> children;
+    children.reserve(level_keys[level + 1].size());
+    for (std::uint64_t k : level_keys[level + 1]) children.push_back({node_index[level].find(parent_key(k)), k});
+    std::sort(children.begin(), children.end());
+    for (auto [parent, key] : children) {
+      if (tree.first_child[parent] < 0) tree.first_child[parent] = std::int32_t(tree.keys.size());
+      ++tree.child_counts[parent];
+      add_node(level + 1, key, parent);
+    }
+  }
+  level_begin[depth + 1] = std::int32_t(tree.keys.size());
+  const std::size_t n = tree.size();
+  tree.cases.assign(n, 0);
+  tree.edge_vertices.resize(n);
+  tree.first_triangle.assign(n, 0);
+  tree.triangle_counts.assign(n, 0);
+  tree.metrics.assign(n, 0.f);
+
+  // Leaf vertices by grid edge (lower lattice corner, axis).
+  FlatHashMap edge_vertex(leaves.size() * 2);
+  for (std::size_t l = 0; l < leaves.size(); ++l)
+    for (int e = 0; e < 12; ++e)
+      if (leaves.edge_vertices[l][e] >= 0) {
+        const std::uint64_t lower = corner_lattice_key(leaves.cube_keys[l], 0, edge_corner(e, 0));
+        edge_vertex.insert((lower << 2) | std::uint64_t(e / 4), leaves.edge_vertices[l][e]);
+      }
+
+  LatticeDistances distances(leaves, field);
+  const auto& table = cube_cases();
+  const std::size_t first_new_vertex = tree.positions.size();
+  // Coarse edges resolved so far, per level: (lower lattice corner << 2 | axis) -> vertex.
+  std::vector<FlatHashMap> edge_memo(depth + 1);
+
+  // The vertex on each given level-`level` edge whose ends' signs differ: the
+  // half that changes sign, recursively, down to a leaf edge.
+  auto resolve_edges = [&](int level, const std::vector<std::uint64_t>& edges, std::vector<std::int32_t>* out) {
+    out->assign(edges.size(), -1);
+    std::vector<std::uint64_t> current = edges;  // edge key at the level being walked
+    std::vector<std::size_t> open(edges.size());
+    std::iota(open.begin(), open.end(), 0);
+    std::vector<std::vector<std::uint64_t>> path(edges.size());
+    for (int l = level; l < depth && !open.empty(); ++l) {
+      const int half_shift = depth - l - 1;
+      std::vector<std::uint64_t> mids;
+      mids.reserve(open.size() * 2);
+      for (std::size_t i : open) {
+        const std::uint64_t lower = current[i] >> 2;
+        const int axis = int(current[i] & 3);
+        mids.push_back(lower);
+        mids.push_back(lower + (kAxisStep[axis] << half_shift));
+      }
+      distances.ensure(mids);
+      std::vector<std::size_t> still;
+      for (std::size_t i : open) {
+        const std::uint64_t lower = current[i] >> 2;
+        const int axis = int(current[i] & 3);
+        const std::uint64_t mid = lower + (kAxisStep[axis] << half_shift);
+        const std::uint64_t half_lower = distances.inside(lower) != distances.inside(mid) ? lower : mid;
+        current[i] = (half_lower << 2) | std::uint64_t(axis);
+        path[i].push_back(current[i]);
+        const std::int32_t known = edge_memo[l + 1].find(current[i]);
+        if (known >= 0) (*out)[i] = known;
+        else still.push_back(i);
+      }
+      open.swap(still);
+    }
+    for (std::size_t i : open) {
+      // A leaf edge: the mesh's vertex, or one interpolated where no leaf has it.
+      std::int32_t v = edge_vertex.find(current[i]);
+      if (v < 0) {
+        const std::uint64_t lower = current[i] >> 2;
+        const int axis = int(current[i] & 3);
+        const std::uint64_t upper = lower + kAxisStep[axis];
+        distances.ensure({lower, upper});
+        const float da = distances.at(lower), db = distances.at(upper);
+        const float t = std::clamp(std::fabs(da) / (std::fabs(da) + std::fabs(db)), 1e-4f, 1.f - 1e-4f);
+        int x, y, z;
+        unpack_key(lower, &x, &y, &z);
+        Vec3f p = tree.grid.corner_position(x, y, z);
+        p[axis] += t * float(tree.grid.cube_size);
+        v = std::int32_t(tree.positions.size());
+        tree.positions.push_back(p);
+        edge_vertex.insert(current[i], v);
+      }
+      (*out)[i] = v;
+    }
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+      edge_memo[level].insert(edges[i], (*out)[i]);
+      for (std::size_t k = 0; k < path[i].size(); ++k) edge_memo[level + 1 + k].insert(path[i][k], (*out)[i]);
+    }
+  };
+
+  // Cases, edge vertices and triangles, level by level from the leaves up.
+  for (int level = depth; level >= 0; --level) {
+    const int shift = depth - level;
+    const std::int32_t begin = level_begin[level], end = level_begin[level + 1];
+    if (level == depth) {
+      for (std::int32_t node = begin; node < end; ++node) {
+        const std::int32_t l = leaf_index.find(tree.keys[node]);
+        tree.cases[node] = leaves.cases[l];
+        tree.edge_vertices[node] = leaves.edge_vertices[l];
+      }
+    } else {
+      std::vector<std::uint64_t> corners;
+      corners.reserve(std::size_t(end - begin) * 8);
+      for (std::int32_t node = begin; node < end; ++node)
+        for (int c = 0; c < 8; ++c) corners.push_back(corner_lattice_key(tree.keys[node], shift, c));
+      distances.ensure(corners);
+      std::vector<std::uint64_t> edges;
+      std::vector<std::pair<std::int32_t, int>> slots;
+      for (std::int32_t node = begin; node < end; ++node) {
+        std::uint8_t mask = 0;
+        for (int c = 0; c < 8; ++c) mask |= std::uint8_t(distances.inside(corners[std::size_t(node - begin) * 8 + c])) << c;
+        tree.cases[node] = mask;
+        tree.edge_vertices[node].fill(-1);
+        for (int e = 0; e < 12; ++e) {
+          if (!(table[mask].edge_mask >> e & 1)) continue;
+          edges.push_back((corner_lattice_key(tree.keys[node], shift, edge_corner(e, 0)) << 2) | std::uint64_t(e / 4));
+          slots.push_back({node, e});
+        }
+      }
+      std::vector<std::int32_t> vertices;
+      resolve_edges(level, edges, &vertices);
+      for (std::size_t i = 0; i < slots.size(); ++i) tree.edge_vertices[slots[i].first][slots[i].second] = vertices[i];
+    }
+    for (std::int32_t node = begin; node < end; ++node) {
+      const CubeCase& cc = table[tree.cases[node]];
+      const std::int32_t l = level == depth ? leaf_index.find(tree.keys[node]) : -1;
+      tree.first_triangle[node] = std::int32_t(tree.triangles.size());
+      for (int t = 0; t < cc.triangle_count; ++t) {
+        if (l >= 0 && !(leaves.triangle_masks[l] >> t & 1)) continue;
+        const auto& ev = tree.edge_vertices[node];
+        tree.triangles.push_back({ev[cc.triangles[t][0]], ev[cc.triangles[t][1]], ev[cc.triangles[t][2]]});
+      }
+      tree.triangle_counts[node] = std::uint8_t(tree.triangles.size() - std::size_t(tree.first_triangle[node]));
+    }
+  }
+
+  // Seed §5.2: the metric is the area the children add over the node's own.
+  std::vector<double> area(n, 0.0);
+  for (std::size_t node = 0; node < n; ++node)
+    for (std::int32_t t = 0; t < tree.triangle_counts[node]; ++t)
+      area[node] += triangle_area(tree.positions, tree.triangles[std::size_t(tree.first_triangle[node] + t)]);
+  for (std::size_t node = 0; node < n; ++node) {
+    if (tree.is_leaf(node)) continue;
+    double children = 0.0;
+    for (int c = 0; c < tree.child_counts[node]; ++c) children += area[std::size_t(tree.first_child[node] + c)];
+    tree.metrics[node] = float(children - area[node]);
+  }
+
+  // Added vertices take normals from the triangles around them, colours from
+  // their neighbours.
+  const std::size_t total = tree.positions.size();
+  if (total > first_new_vertex) {
+    tree.normals.resize(total, Vec3f::Zero());
+    std::vector<Vec3f> colour_sum(total, Vec3f::Zero());
+    std::vector<float> colour_count(total, 0.f);
+    const bool colours = !tree.colors.empty();
+    if (colours) tree.colors.resize(total, Rgb{0, 0, 0});
+    for (const Triangle& t : tree.triangles) {
+      const Vec3f nrm = (tree.positions[t[1]] - tree.positions[t[0]]).cross(tree.positions[t[2]] - tree.positions[t[0]]);
+      for (int k = 0; k < 3; ++k) {
+        if (std::size_t(t[k]) < first_new_vertex) continue;
+        tree.normals[t[k]] += nrm;
+        for (int j = 1; j < 3 && colours; ++j) {
+          const std::int32_t other = t[(k + j) % 3];
+          if (std::size_t(other) >= first_new_vertex) continue;
+          colour_sum[t[k]] += Vec3f(tree.colors[other][0], tree.colors[other][1], tree.colors[other][2]);
+          colour_count[t[k]] += 1.f;
+        }
+      }
+    }
+    for (std::size_t v = first_new_vertex; v < total; ++v) {
+      tree.normals[v] = tree.normals[v].norm() > 0.f ? Vec3f(tree.normals[v].normalized()) : Vec3f::UnitZ();
+      if (colours && colour_count[v] > 0.f) {
+        const Vec3f c = colour_sum[v] / colour_count[v];
+        tree.colors[v] = Rgb{std::uint8_t(c[0] + 0.5f), std::uint8_t(c[1] + 0.5f), std::uint8_t(c[2] + 0.5f)};
+      }
+    }
+  }
+  return tree;
+}
+
+}  // namespace scan2lod

@@ -1,0 +1,67 @@
+// The marching-cube octree (seed 003 §5.1): the leaf cube nodes of a
+// reconstruction, and above them every coarser cube that holds one, each a
+// marching cube of its own with corner signs, a vertex on each crossed edge and
+// its triangles.
+//
+// Corner signs. A corner shared by leaf cubes keeps the leaves' signed
+// distance; any other lattice point gets the same signed-distance field,
+// evaluated once per point. So every node that shares a corner sees the same
+// sign, which is what keeps neighbouring nodes' faces in agreement (the seed
+// derives parents' signs from their children, which neighbours can see
+// differently).
+//
+// Edge vertices. A coarse edge whose end signs differ takes the half that holds
+// the change, recursively, down to a leaf edge, and uses that leaf's vertex
+// (§5.1: "extending the child edge that holds the crossing"): coarse nodes share
+// the finest mesh's vertices instead of copying them. Only where no leaf has a
+// vertex on that edge is one added, interpolated on the leaf edge.
+#pragma once
+
+#include "core/types.h"
+#include "reconstruct/marching_cubes.h"
+#include "reconstruct/signed_distance.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace scan2lod {
+
+struct McOctree {
+  CubeGrid grid;   // the leaves' grid
+  int depth = 0;   // leaves sit at level depth; resolution == 2^depth
+
+  // Nodes, level by level from the root (level 0); a node's children are
+  // contiguous and on the next level.
+  std::vector<std::uint64_t> keys;  // packed (x, y, z) on its level's lattice
+  std::vector<std::uint8_t> levels;
+  std::vector<std::int32_t> parents;       // -1 for the root
+  std::vector<std::int32_t> first_child;   // -1 for leaves
+  std::vector<std::uint8_t> child_counts;
+  std::vector<std::uint8_t> cases;         // mask of inside corners
+  std::vector<std::array<std::int32_t, 12>> edge_vertices;  // vertex per crossed edge, else -1
+  std::vector<std::int32_t> first_triangle;  // the node's own triangles: [first, first + count)
+  std::vector<std::uint8_t> triangle_counts;
+  std::vector<float> metrics;  // seed §5.2: children's triangle area minus its own (0 for leaves)
+
+  std::vector<Triangle> triangles;        // every node's own triangles
+  std::vector<Triangle> patch_triangles;  // the leaves' hole patches, shown with the leaves
+
+  // One vertex array for every level: the full mesh's vertices first.
+  std::vector<Vec3f> positions;
+  std::vector<Vec3f> normals;
+  std::vector<Rgb> colors;
+  std::size_t mesh_vertices = 0;
+
+  std::size_t size() const { return keys.size(); }
+  bool is_leaf(std::size_t n) const { return first_child[n] < 0; }
+};
+
+// Builds the octree over a reconstruction's leaf cube nodes and mesh.
+// @param[in] leaves  CubeNodes from reconstruct(); resolution a power of two
+// @param[in] mesh    the reconstruction's mesh (its vertices are the leaves')
+// @param[in] field   signed distance for lattice points the leaves lack
+// Throws InputError when there are no leaves.
+McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field);
+
+}  // namespace scan2lod

@@ -1,0 +1,151 @@
+// Claims of seed 003 chapters 5-6 about the prioritized marching-cube octree.
+#include "acquisition/load_inputs.h"
+#include "lod/extract.h"
+#include "lod/lod_array.h"
+#include "lod/mc_octree.h"
+#include "reconstruct/marching_cubes.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+
+using namespace scan2lod;
+
+namespace {
+
+struct Model {
+  OrientedPoints points;
+  Reconstruction reconstruction;
+  McOctree tree;
+  LodArray lod;
+};
+
+Model build_model(OrientedPoints points, int resolution) {
+  Model m;
+  m.points = std::move(points);
+  ReconstructOptions options;
+  options.resolution = resolution;
+  m.reconstruction = reconstruct(m.points, options);
+  PointIndex index(m.points);
+  const auto field = unlimited_distance_field(m.points, index, options.distance,
+                                              float(m.reconstruction.leaves.grid.cube_size));
+  m.tree = build_mc_octree(m.reconstruction.leaves, m.reconstruction.mesh, field);
+  m.lod = number_nodes(m.tree);
+  return m;
+}
+
+const Model& bunny64() {
+  static const Model m =
+      build_model(load_oriented_points({std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf"}), 64);
+  return m;
+}
+
+std::vector<Triangle> sorted_rotated(std::vector<Triangle> t) {
+  // Same triangle, whatever corner it starts at.
+  for (Triangle& x : t) std::rotate(x.begin(), std::min_element(x.begin(), x.end()), x.end());
+  std::sort(t.begin(), t.end());
+  return t;
+}
+
+}  // namespace
+
+TEST(McOctree, FullDetailIsTheMarchingCubesMesh) {
+  const Model& m = bunny64();
+  std::vector<std::uint8_t> scratch;
+  std::vector<Triangle> full;
+  extract_lod(m.tree, m.lod, m.lod.full(), &scratch, &full);
+  EXPECT_EQ(sorted_rotated(full), sorted_rotated(m.reconstruction.mesh.triangles));
+  // Same vertex positions: the octree's vertex array starts with the mesh's.
+  ASSERT_EQ(m.tree.mesh_vertices, m.reconstruction.mesh.positions.size());
+  for (std::size_t v = 0; v < m.tree.mesh_vertices; ++v)
+    ASSERT_EQ(m.tree.positions[v], m.reconstruction.mesh.positions[v]);
+}
+
+TEST(McOctree, ParentsShareTheLeavesVertices) {
+  // §5.1: a coarse node's vertices are the finest mesh's vertices on its edges.
+  const Model& m = bunny64();
+  std::size_t coarse = 0, shared = 0;
+  for (std::size_t n = 0; n < m.tree.size(); ++n) {
+    if (m.tree.is_leaf(n)) continue;
+    for (std::int32_t v : m.tree.edge_vertices[n]) {
+      if (v < 0) continue;
+      ++coarse;
+      shared += std::size_t(v) < m.tree.mesh_vertices;
+    }
+  }
+  ASSERT_GT(coarse, 1000u);
+  EXPECT_GT(double(shared), 0.99 * double(coarse));
+}
+
+TEST(LodArray, EveryNodeExpandsOnceParentsFirst) {
+  const Model& m = bunny64();
+  std::vector<int> seen(m.tree.size(), 0);
+  std::size_t internal = 0;
+  for (std::size_t n = 0; n < m.tree.size(); ++n) internal += !m.tree.is_leaf(n);
+  ASSERT_EQ(m.lod.order.size(), internal);
+  EXPECT_EQ(m.lod.order.front(), 0);
+  std::vector<std::uint8_t> expanded(m.tree.size(), 0);
+  expanded[0] = 1;
+  for (std::size_t i = 1; i < m.lod.order.size(); ++i) {
+    const std::int32_t n = m.lod.order[i];
+    ASSERT_EQ(seen[n]++, 0);
+    ASSERT_TRUE(expanded[m.tree.parents[n]]) << "node expanded before its parent";
+    expanded[n] = 1;
+  }
+}
+
+TEST(LodArray, NeighboursDifferByAtMostOneLevelInEveryPrefix) {
+  // Walk all prefixes; after each expansion, every new child's same-level
+  // neighbourhood must be covered by cut nodes no coarser than its parent.
+  const Model& m = bunny64();
+  const McOctree& t = m.tree;
+  std::map<std::pair<int, std::uint64_t>, std::int32_t> node_at;
+  for (std::size_t n = 0; n < t.size(); ++n) node_at[{t.levels[n], t.keys[n]}] = std::int32_t(n);
+  std::vector<std::uint8_t> in_cut(t.size(), 0), expanded(t.size(), 0);
+  in_cut[0] = 1;
+  auto covering_level = [&](int level, int x, int y, int z) {
+    // The cut node that covers lattice cell (x, y, z) of `level`, or -1 if none.
+    for (int l = level; l >= 0; --l) {
+      const int s = level - l;
+      auto it = node_at.find({l, pack_key(std::uint64_t(x) >> s, std::uint64_t(y) >> s, std::uint64_t(z) >> s)});
+      if (it == node_at.end()) continue;
+      if (in_cut[it->second]) return l;
+      if (expanded[it->second]) return -1;  // covered by finer nodes, or by none
+    }
+    return -1;
+  };
+  for (std::size_t i = 0; i < m.lod.order.size(); ++i) {
+    const std::int32_t n = m.lod.order[i];
+    in_cut[n] = 0;
+    expanded[n] = 1;
+    for (int c = 0; c < t.child_counts[n]; ++c) in_cut[t.first_child[n] + c] = 1;
+    for (int c = 0; c < t.child_counts[n]; ++c) {
+      const std::int32_t child = t.first_child[n] + c;
+      int x, y, z;
+      unpack_key(t.keys[child], &x, &y, &z);
+      const int side = 1 << t.levels[child];
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            if (x + dx < 0 || y + dy < 0 || z + dz < 0 || x + dx >= side || y + dy >= side || z + dz >= side) continue;
+            const int level = covering_level(t.levels[child], x + dx, y + dy, z + dz);
+            ASSERT_TRUE(level < 0 || level >= t.levels[child] - 1)
+                << "prefix " << i + 1 << ": a level-" << int(t.levels[child]) << " node beside a level-" << level << " node";
+          }
+    }
+  }
+}
+
+TEST(LodArray, AccumulationTableCountsTheExtractedTriangles) {
+  const Model& m = bunny64();
+  std::vector<std::uint8_t> scratch;
+  std::vector<Triangle> tris;
+  for (double percent : {0.0, 1.0, 5.0, 10.0, 20.0, 40.0, 60.0, 80.0, 100.0}) {
+    const std::size_t p = priority_for_percent(m.lod, percent);
+    extract_lod(m.tree, m.lod, p, &scratch, &tris);
+    EXPECT_EQ(std::int64_t(tris.size()), m.lod.accumulated[p]) << percent << "%";
+    EXPECT_LE(m.lod.accumulated[priority_for_triangles(m.lod, std::int64_t(tris.size()))], std::int64_t(tris.size()));
+  }
+  EXPECT_TRUE(std::all_of(scratch.begin(), scratch.end(), [](std::uint8_t f) { return f == 0; }));
+}
