@@ -1,18 +1,59 @@
 #include "lod/extract.h"
 
 #include <algorithm>
+#include <array>
 
 namespace scan2lod {
+namespace {
+
+int cell(int dx, int dy, int dz) { return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1); }
+
+// The cell across each face (axis * 2 + side) of a node.
+const int kFaceCell[6] = {cell(-1, 0, 0), cell(1, 0, 0), cell(0, -1, 0), cell(0, 1, 0), cell(0, 0, -1), cell(0, 0, 1)};
+
+// The three cells around each node edge (numbering of cube_table.h).
+const auto kEdgeCells = [] {
+  std::array<std::array<int, 3>, 12> cells{};
+  for (int e = 0; e < 12; ++e) {
+    const int axis = e / 4, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    int du[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
+    du[u] = (e & 1) ? 1 : -1;
+    dv[v] = (e & 2) ? 1 : -1;
+    cells[e] = {cell(du[0], du[1], du[2]), cell(dv[0], dv[1], dv[2]),
+                cell(du[0] + dv[0], du[1] + dv[1], du[2] + dv[2])};
+  }
+  return cells;
+}();
+
+}  // namespace
+
+void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
+               std::vector<Triangle>* triangles) {
+  auto emit_own = [&] {
+    const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
+    triangles->insert(triangles->end(), first, first + tree.triangle_counts[node]);
+  };
+  if (std::size_t(node) >= tree.internal_nodes()) return emit_own();
+  // A node beside expanded cells is triangulated against the finer nodes there.
+  const auto& around = tree.neighbours[node];
+  auto fine = [&](int cell) { return around[cell] >= 0 && expanded[around[cell]]; };
+  std::uint16_t edges = 0;
+  for (int e = 0; e < 12; ++e)
+    if (fine(kEdgeCells[e][0]) || fine(kEdgeCells[e][1]) || fine(kEdgeCells[e][2])) edges |= std::uint16_t(1u << e);
+  if (!edges) return emit_own();
+  std::uint8_t faces = 0;
+  for (int f = 0; f < 6; ++f) faces |= std::uint8_t(fine(kFaceCell[f])) << f;
+  const TransitionInput in{tree.boundary_inside[node], tree.edge_vertices[node].data(),
+                           tree.sub_edge_vertices[node].data(), tree.centre_vertices[node], faces, edges};
+  triangulate_transition(in, triangles);
+}
 
 void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,
                  std::vector<std::uint8_t>* expanded, std::vector<Triangle>* triangles) {
   priority = std::min(priority, lod.full());
   triangles->clear();
   expanded->resize(tree.size(), 0);
-  auto emit = [&](std::int32_t node) {
-    const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
-    triangles->insert(triangles->end(), first, first + tree.triangle_counts[node]);
-  };
+  auto emit = [&](std::int32_t node) { emit_node(tree, node, *expanded, triangles); };
   if (priority == 0) {
     emit(0);
     return;

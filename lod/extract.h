@@ -16,6 +16,11 @@ namespace scan2lod {
 void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,
                  std::vector<std::uint8_t>* expanded, std::vector<Triangle>* triangles);
 
+// Appends the triangles of one node of the cut, given which nodes are expanded:
+// its own, or, beside expanded cells, its transition triangulation.
+void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
+               std::vector<Triangle>* triangles);
+
 // A self-contained mesh of those triangles: only the vertices they use, with
 // normals and colours.
 TriangleMesh compact_lod(const McOctree& tree, const std::vector<Triangle>& triangles);

@@ -1,5 +1,7 @@
 #include "lod/lod_array.h"
 
+#include "lod/extract.h"
+
 #include "core/flat_hash.h"
 
 #include <algorithm>
@@ -56,22 +58,39 @@ LodArray number_nodes(const McOctree& tree) {
     std::vector<std::int32_t>().swap(waiting[node]);
   };
 
+  // The accumulation table follows the extracted meshes exactly: expanding a
+  // node replaces its triangles by its children's and re-triangulates the
+  // nodes of the cut beside it, whose transitions change.
+  std::vector<std::int32_t> current(n, 0);  // triangles each cut node emits now
+  std::vector<Triangle> scratch;
+  auto count = [&](std::int32_t node) {
+    scratch.clear();
+    emit_node(tree, node, expanded, &scratch);
+    return std::int32_t(scratch.size());
+  };
   LodArray lod;
   lod.order.reserve(n);
   enter_cut(0);
-  std::int64_t triangles = tree.triangle_counts[0];
+  std::int64_t triangles = current[0] = tree.triangle_counts[0];
   lod.accumulated.push_back(triangles);
   while (!queue.empty()) {
     const std::int32_t node = queue.top().second;
     queue.pop();
     lod.order.push_back(node);
     expand(node);
-    triangles -= tree.triangle_counts[node];
+    triangles -= current[node];
     for (int c = 0; c < tree.child_counts[node]; ++c) {
       const std::int32_t child = tree.first_child[node] + c;
-      triangles += tree.triangle_counts[child];
+      triangles += current[child] = count(child);
       enter_cut(child);
     }
+    if (std::size_t(node) < tree.internal_nodes())
+      for (std::int32_t q : tree.neighbours[node])
+        if (q >= 0 && q != node && !expanded[q] && expanded[tree.parents[q]]) {
+          const std::int32_t now = count(q);
+          triangles += now - current[q];
+          current[q] = now;
+        }
     lod.accumulated.push_back(triangles);
   }
   // Full detail also shows the hole patches that sit between leaves.

@@ -257,6 +257,56 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     }
   }
 
+  // Transition data for the nodes above the leaves: signs and crossings on the
+  // boundary refined to the next level, and the neighbouring nodes.
+  const std::int32_t internal = level_begin[depth];
+  tree.boundary_inside.assign(std::size_t(internal), 0);
+  tree.sub_edge_vertices.resize(std::size_t(internal));
+  tree.neighbours.resize(std::size_t(internal));
+  const auto& sub_edges = transition_sub_edges();
+  auto lattice_key = [&](std::uint64_t key, int shift, int p) {
+    int x, y, z;
+    unpack_key(key, &x, &y, &z);
+    const std::uint64_t half = 1ull << (shift - 1);
+    return pack_key((std::uint64_t(x) << shift) + (p % 3) * half, (std::uint64_t(y) << shift) + (p / 3 % 3) * half,
+                    (std::uint64_t(z) << shift) + (p / 9) * half);
+  };
+  for (int level = 0; level < depth; ++level) {
+    const int shift = depth - level;
+    const std::int32_t begin = level_begin[level], end = level_begin[level + 1];
+    std::vector<std::uint64_t> points;
+    points.reserve(std::size_t(end - begin) * 27);
+    for (std::int32_t node = begin; node < end; ++node)
+      for (int p = 0; p < 27; ++p) points.push_back(lattice_key(tree.keys[node], shift, p));
+    distances.ensure(points);
+    std::vector<std::uint64_t> edges;
+    std::vector<std::pair<std::int32_t, int>> slots;
+    for (std::int32_t node = begin; node < end; ++node) {
+      std::uint32_t inside = 0;
+      for (int p = 0; p < 27; ++p) inside |= std::uint32_t(distances.inside(points[std::size_t(node - begin) * 27 + p])) << p;
+      tree.boundary_inside[node] = inside;
+      tree.sub_edge_vertices[node].fill(-1);
+      for (int e = 0; e < kSubEdges; ++e) {
+        const SubEdge& se = sub_edges[e];
+        if (((inside >> se.a) & 1) == ((inside >> se.b) & 1)) continue;
+        const int axis = (se.b - se.a) == 1 ? 0 : (se.b - se.a) == 3 ? 1 : 2;
+        edges.push_back((points[std::size_t(node - begin) * 27 + se.a] << 2) | std::uint64_t(axis));
+        slots.push_back({node, e});
+      }
+      int x, y, z;
+      unpack_key(tree.keys[node], &x, &y, &z);
+      const int side = 1 << level;
+      for (int c = 0; c < 27; ++c) {
+        const int nx = x + c % 3 - 1, ny = y + c / 3 % 3 - 1, nz = z + c / 9 - 1;
+        tree.neighbours[node][c] = nx < 0 || ny < 0 || nz < 0 || nx >= side || ny >= side || nz >= side
+                                       ? -1 : node_index[level].find(pack_key(nx, ny, nz));
+      }
+    }
+    std::vector<std::int32_t> vertices;
+    resolve_edges(level + 1, edges, &vertices);
+    for (std::size_t i = 0; i < slots.size(); ++i) tree.sub_edge_vertices[slots[i].first][slots[i].second] = vertices[i];
+  }
+
   // Seed §5.2: the metric is the area the children add over the node's own.
   std::vector<double> area(n, 0.0);
   for (std::size_t node = 0; node < n; ++node)
@@ -297,6 +347,31 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
         const Vec3f c = colour_sum[v] / colour_count[v];
         tree.colors[v] = Rgb{std::uint8_t(c[0] + 0.5f), std::uint8_t(c[1] + 0.5f), std::uint8_t(c[2] + 0.5f)};
       }
+    }
+  }
+  // Each node above the leaves gets a centre vertex for its transition fans:
+  // the mean of its own crossings, or of its boundary's where it has none.
+  tree.centre_vertices.assign(std::size_t(internal), -1);
+  for (std::int32_t node = 0; node < internal; ++node) {
+    Vec3f p = Vec3f::Zero(), nrm = Vec3f::Zero(), colour = Vec3f::Zero();
+    int count = 0;
+    auto add = [&](std::int32_t v) {
+      if (v < 0) return;
+      p += tree.positions[v];
+      nrm += tree.normals[v];
+      if (!tree.colors.empty()) colour += Vec3f(tree.colors[v][0], tree.colors[v][1], tree.colors[v][2]);
+      ++count;
+    };
+    for (std::int32_t v : tree.edge_vertices[node]) add(v);
+    if (count == 0)
+      for (std::int32_t v : tree.sub_edge_vertices[node]) add(v);
+    if (count == 0) continue;  // nothing crosses its boundary: it never needs a fan
+    tree.centre_vertices[node] = std::int32_t(tree.positions.size());
+    tree.positions.push_back(p / float(count));
+    tree.normals.push_back(nrm.norm() > 0.f ? Vec3f(nrm.normalized()) : Vec3f::UnitZ());
+    if (!tree.colors.empty()) {
+      const Vec3f c = colour / float(count);
+      tree.colors.push_back(Rgb{std::uint8_t(c[0] + 0.5f), std::uint8_t(c[1] + 0.5f), std::uint8_t(c[2] + 0.5f)});
     }
   }
   return tree;

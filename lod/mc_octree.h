@@ -18,6 +18,7 @@
 #pragma once
 
 #include "core/types.h"
+#include "lod/transition.h"
 #include "reconstruct/marching_cubes.h"
 #include "reconstruct/signed_distance.h"
 
@@ -44,6 +45,13 @@ struct McOctree {
   std::vector<std::uint8_t> triangle_counts;
   std::vector<float> metrics;  // seed §5.2: children's triangle area minus its own (0 for leaves)
 
+  // Crack patching (lod/transition.h), for the nodes above the leaves, which
+  // come first: indexed by node in [0, internal_nodes()).
+  std::vector<std::uint32_t> boundary_inside;  // bit p: local lattice point p is inside
+  std::vector<std::array<std::int32_t, kSubEdges>> sub_edge_vertices;
+  std::vector<std::int32_t> centre_vertices;
+  std::vector<std::array<std::int32_t, 27>> neighbours;  // node in each cell around (13: itself), or -1
+
   std::vector<Triangle> triangles;        // every node's own triangles
   std::vector<Triangle> patch_triangles;  // the leaves' hole patches, shown with the leaves
 
@@ -55,6 +63,7 @@ struct McOctree {
 
   std::size_t size() const { return keys.size(); }
   bool is_leaf(std::size_t n) const { return first_child[n] < 0; }
+  std::size_t internal_nodes() const { return centre_vertices.size(); }
 };
 
 // Builds the octree over a reconstruction's leaf cube nodes and mesh.

@@ -1,11 +1,15 @@
 // Claims of seed 003 chapters 5-6 about the prioritized marching-cube octree.
+#include "acquisition/lattice_normals.h"
 #include "acquisition/load_inputs.h"
+#include "acquisition/virtual_scanner.h"
 #include "lod/extract.h"
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
+#include "measure/topology.h"
 #include "reconstruct/marching_cubes.h"
 
 #include <gtest/gtest.h>
+#include <open3d/geometry/TriangleMesh.h>
 
 #include <algorithm>
 #include <map>
@@ -148,4 +152,42 @@ TEST(LodArray, AccumulationTableCountsTheExtractedTriangles) {
     EXPECT_LE(m.lod.accumulated[priority_for_triangles(m.lod, std::int64_t(tris.size()))], std::int64_t(tris.size()));
   }
   EXPECT_TRUE(std::all_of(scratch.begin(), scratch.end(), [](std::uint8_t f) { return f == 0; }));
+}
+
+namespace {
+
+OrientedPoints scanned(const open3d::geometry::TriangleMesh& shape) {
+  TriangleMesh mesh;
+  for (const auto& v : shape.vertices_) mesh.positions.push_back(v.cast<float>());
+  for (const auto& t : shape.triangles_) mesh.triangles.push_back({t[0], t[1], t[2]});
+  VirtualScanOptions options;
+  options.views = 14;
+  OrientedPoints points;
+  for (const VirtualScan& s : virtual_scan(mesh, options)) points.append(range_image_to_points(s.image, s.pose));
+  return points;
+}
+
+void expect_closed_at_every_level(const Model& m, long euler) {
+  std::vector<std::uint8_t> scratch;
+  std::vector<Triangle> tris;
+  for (double percent : {1.0, 5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0}) {
+    extract_lod(m.tree, m.lod, priority_for_percent(m.lod, percent), &scratch, &tris);
+    const MeshTopology t = mesh_topology(compact_lod(m.tree, tris));
+    EXPECT_EQ(t.boundary_edges, 0u) << percent << "%";
+    EXPECT_EQ(t.non_manifold_edges, 0u) << percent << "%";
+    EXPECT_EQ(t.components, 1u) << percent << "%";
+    EXPECT_EQ(t.euler_characteristic, euler) << percent << "%";
+  }
+}
+
+}  // namespace
+
+TEST(CrackPatching, ScannedSphereIsClosedAtEveryLevel) {
+  const Model m = build_model(scanned(*open3d::geometry::TriangleMesh::CreateSphere(1.0, 120)), 64);
+  expect_closed_at_every_level(m, 2);
+}
+
+TEST(CrackPatching, ScannedTorusIsClosedAtEveryLevel) {
+  const Model m = build_model(scanned(*open3d::geometry::TriangleMesh::CreateTorus(1.0, 0.4, 200, 80)), 64);
+  expect_closed_at_every_level(m, 0);
 }

@@ -1,0 +1,140 @@
+#include "lod/transition.h"
+
+#include "reconstruct/cube_table.h"
+
+#include <algorithm>
+
+namespace scan2lod {
+namespace {
+
+int lattice(int i, int j, int k) { return i + 3 * j + 9 * k; }
+
+struct Tables {
+  std::array<SubEdge, kSubEdges> sub_edges{};
+  std::array<std::array<std::int8_t, 27>, 27> sub_edge_of{};  // local points -> sub-edge, or -1
+  std::array<std::array<std::int8_t, 27>, 27> edge_of{};      // node corners' points -> node edge, or -1
+  std::array<std::array<std::uint8_t, 9>, 6> face_points{};   // (u, v) grid on each face, index u + 3v
+  std::array<bool, 6> face_reversed{};                        // side 0 faces wind the other way
+  std::array<std::array<std::int8_t, 4>, 6> face_edges{};     // node edges around each face, CCW from (0,0)
+
+  Tables() {
+    for (auto& row : sub_edge_of) row.fill(-1);
+    for (auto& row : edge_of) row.fill(-1);
+    auto on_boundary = [](int i, int j, int k) { return i != 1 || j != 1 || k != 1; };
+    int count = 0;
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i)
+          for (int axis = 0; axis < 3; ++axis) {
+            int q[3] = {i, j, k};
+            if (q[axis] == 2) continue;
+            int r[3] = {i, j, k};
+            ++r[axis];
+            // Both ends on one face of the node: some other coordinate is 0 or 2.
+            bool face = false;
+            for (int other = 0; other < 3; ++other)
+              if (other != axis && (q[other] != 1)) face = true;
+            if (!face || !on_boundary(q[0], q[1], q[2]) || !on_boundary(r[0], r[1], r[2])) continue;
+            const int a = lattice(q[0], q[1], q[2]), b = lattice(r[0], r[1], r[2]);
+            sub_edges[count] = {std::uint8_t(a), std::uint8_t(b)};
+            sub_edge_of[a][b] = sub_edge_of[b][a] = std::int8_t(count);
+            ++count;
+          }
+    for (int e = 0; e < 12; ++e) {
+      const int a = lattice_of_corner(edge_corner(e, 0)), b = lattice_of_corner(edge_corner(e, 1));
+      edge_of[a][b] = edge_of[b][a] = std::int8_t(e);
+    }
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side) {
+        const int f = axis * 2 + side, u = (axis + 1) % 3, v = (axis + 2) % 3;
+        for (int pv = 0; pv < 3; ++pv)
+          for (int pu = 0; pu < 3; ++pu) {
+            int p[3];
+            p[axis] = side * 2;
+            p[u] = pu;
+            p[v] = pv;
+            face_points[f][pu + 3 * pv] = std::uint8_t(lattice(p[0], p[1], p[2]));
+          }
+        face_reversed[f] = side == 0;
+        const int corners[4][2] = {{0, 0}, {2, 0}, {2, 2}, {0, 2}};
+        for (int k = 0; k < 4; ++k) {
+          const int* c0 = corners[k];
+          const int* c1 = corners[(k + 1) % 4];
+          face_edges[f][k] = edge_of[face_points[f][c0[0] + 3 * c0[1]]][face_points[f][c1[0] + 3 * c1[1]]];
+        }
+      }
+  }
+};
+
+const Tables& tables() {
+  static const Tables t;
+  return t;
+}
+
+}  // namespace
+
+const std::array<SubEdge, kSubEdges>& transition_sub_edges() { return tables().sub_edges; }
+
+int lattice_of_corner(int c) { return lattice((c & 1) * 2, ((c >> 1) & 1) * 2, ((c >> 2) & 1) * 2); }
+
+void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out) {
+  const Tables& T = tables();
+  // Crossing slots: 0..47 sub-edges, 48..59 whole node edges.
+  std::int8_t next[60];
+  std::fill(next, next + 60, -1);
+  auto slot = [&](int p, int q) -> int {
+    const int s = T.sub_edge_of[p][q];
+    return s >= 0 ? s : kSubEdges + T.edge_of[p][q];
+  };
+  auto inside = [&](int p) { return (in.inside >> p) & 1; };
+  // Joins one polygon's crossings: each run of inside points is cut off by a
+  // segment from the crossing that leaves it to the one that enters it.
+  auto join = [&](const int* poly, int m, bool reversed) {
+    int order[8];
+    for (int k = 0; k < m; ++k) order[k] = poly[reversed ? m - 1 - k : k];
+    for (int k = 0; k < m; ++k) {
+      const int prev = (k + m - 1) % m;
+      if (!inside(order[k]) || inside(order[prev])) continue;
+      int end = k;
+      while (inside(order[(end + 1) % m])) end = (end + 1) % m;
+      next[slot(order[end], order[(end + 1) % m])] = std::int8_t(slot(order[prev], order[k]));
+    }
+  };
+  for (int f = 0; f < 6; ++f) {
+    const auto& P = T.face_points[f];
+    if ((in.fine_faces >> f) & 1) {
+      for (int qv = 0; qv < 2; ++qv)
+        for (int qu = 0; qu < 2; ++qu) {
+          const int quad[4] = {P[qu + 3 * qv], P[qu + 1 + 3 * qv], P[qu + 1 + 3 * (qv + 1)], P[qu + 3 * (qv + 1)]};
+          join(quad, 4, T.face_reversed[f]);
+        }
+    } else {
+      const int corners[4][2] = {{0, 0}, {2, 0}, {2, 2}, {0, 2}};
+      int poly[8], m = 0;
+      for (int k = 0; k < 4; ++k) {
+        poly[m++] = P[corners[k][0] + 3 * corners[k][1]];
+        if ((in.split_edges >> T.face_edges[f][k]) & 1) {
+          const int mu = (corners[k][0] + corners[(k + 1) % 4][0]) / 2, mv = (corners[k][1] + corners[(k + 1) % 4][1]) / 2;
+          poly[m++] = P[mu + 3 * mv];
+        }
+      }
+      join(poly, m, T.face_reversed[f]);
+    }
+  }
+  auto vertex = [&](int s) { return s < kSubEdges ? in.sub_edge_vertices[s] : in.edge_vertices[s - kSubEdges]; };
+  bool seen[60] = {};
+  int loop[60];
+  for (int start = 0; start < 60; ++start) {
+    if (next[start] < 0 || seen[start]) continue;
+    int m = 0;
+    for (int s = start; s >= 0 && !seen[s]; s = next[s]) seen[s] = true, loop[m++] = s;
+    // Loops run clockwise around the outward normal (as in cube_table.cpp): emit reversed.
+    if (m == 3) {
+      out->push_back({vertex(loop[0]), vertex(loop[2]), vertex(loop[1])});
+      continue;
+    }
+    for (int k = 0; k < m; ++k) out->push_back({in.centre, vertex(loop[(k + 1) % m]), vertex(loop[k])});
+  }
+}
+
+}  // namespace scan2lod

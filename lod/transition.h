@@ -1,0 +1,51 @@
+// Crack patching between octree levels (seed 003 §5.3, done as conforming
+// transitions rather than the seed's projection, which leaves T-junctions).
+//
+// A node beside finer nodes is triangulated on its boundary refined to theirs:
+// every node edge with a finer node around it is split at its midpoint, and
+// every face with a finer node across it is split into four. Each face
+// polygon joins its crossings by the same rule as the case table (each run of
+// inside corners is cut off by one segment), which depends on the polygon's
+// signs alone; both nodes on a face build the same polygon, so they join the
+// same crossings and the mesh stays closed and conforming. The loops that the
+// segments form are fanned around the node's centre vertex.
+//
+// Local lattice: the node's 3x3x3 points (i, j, k) in {0,1,2}^3, index
+// i + 3j + 9k; 1 is a midpoint. The 48 boundary sub-edges join neighbouring
+// boundary points: 24 halves of node edges and 24 half-lines inside faces.
+#pragma once
+
+#include "core/types.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace scan2lod {
+
+constexpr int kSubEdges = 48;
+
+struct SubEdge {
+  std::uint8_t a, b;  // local lattice points, a < b
+};
+
+// The 48 boundary sub-edges, in a fixed order.
+const std::array<SubEdge, kSubEdges>& transition_sub_edges();
+
+// Local lattice point of node corner c (corner numbering of cube_table.h).
+int lattice_of_corner(int c);
+
+// Everything a node needs to triangulate itself against finer neighbours.
+struct TransitionInput {
+  std::uint32_t inside;                          // bit p: lattice point p is inside
+  const std::int32_t* edge_vertices;             // the node's 12 whole-edge vertices
+  const std::int32_t* sub_edge_vertices;         // 48, in transition_sub_edges() order
+  std::int32_t centre;                           // vertex the loops are fanned around
+  std::uint8_t fine_faces;                       // bit axis*2+side: finer node across
+  std::uint16_t split_edges;                     // bit e: finer node around edge e
+};
+
+// Appends the node's triangles (outward, counter-clockwise) to `out`.
+void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out);
+
+}  // namespace scan2lod
