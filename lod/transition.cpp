@@ -128,6 +128,10 @@ void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* ou
     if (next[start] < 0 || seen[start]) continue;
     int m = 0;
     for (int s = start; s >= 0 && !seen[s]; s = next[s]) seen[s] = true, loop[m++] = s;
+    // Two segments between the same two crossings (a single inside midpoint
+    // pinched off on a split edge) enclose nothing: the two neighbours beyond
+    // those faces already share that edge.
+    if (m == 2) continue;
     // Loops run clockwise around the outward normal (as in cube_table.cpp): emit reversed.
     if (m == 3) {
       out->push_back({vertex(loop[0]), vertex(loop[2]), vertex(loop[1])});
