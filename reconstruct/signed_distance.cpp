@@ -5,6 +5,7 @@
 #include <flann/flann.hpp>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -116,6 +117,9 @@ SignedDistanceField unlimited_distance_field(const OrientedPoints& points, const
                                              const SignedDistanceOptions& options, float cube_size) {
   SignedDistanceOptions unlimited = options;
   unlimited.max_distance = std::numeric_limits<float>::infinity();
+  // Far from the data only the sign matters, and the nearest few planes give it:
+  // a wide k-nearest search from far away is the costliest part of the octree.
+  unlimited.neighbours = std::min(unlimited.neighbours, 4);
   return [&points, &index, unlimited, cube_size](const std::vector<Vec3f>& q, std::vector<float>* d) {
     std::vector<std::int32_t> nearest;
     signed_distances(points, index, q, cube_size, unlimited, 0, d, &nearest);
