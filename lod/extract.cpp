@@ -66,8 +66,14 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
       if (!(*expanded)[child]) emit(child);
     }
   }
-  if (priority == lod.full())
-    triangles->insert(triangles->end(), tree.patch_triangles.begin(), tree.patch_triangles.end());
+  for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
+    bool shown = true;
+    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1] && shown; ++k)
+      shown = (*expanded)[tree.patch_needs[k]];
+    if (shown)
+      triangles->insert(triangles->end(), tree.patch_triangles.begin() + tree.patch_group_first[g],
+                        tree.patch_triangles.begin() + tree.patch_group_first[g + 1]);
+  }
   for (std::size_t i = 0; i < priority; ++i) (*expanded)[lod.order[i]] = 0;
 }
 

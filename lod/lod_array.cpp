@@ -68,6 +68,14 @@ LodArray number_nodes(const McOctree& tree) {
     emit_node(tree, node, expanded, &scratch);
     return std::int32_t(scratch.size());
   };
+  // Hole patches show once all the nodes around their rims have expanded.
+  std::vector<std::int32_t> patch_waiting(tree.patch_groups());
+  std::vector<std::vector<std::int32_t>> patches_of(n);
+  for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
+    patch_waiting[g] = tree.patch_needs_first[g + 1] - tree.patch_needs_first[g];
+    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
+      patches_of[tree.patch_needs[k]].push_back(std::int32_t(g));
+  }
   LodArray lod;
   lod.order.reserve(n);
   enter_cut(0);
@@ -91,10 +99,10 @@ LodArray number_nodes(const McOctree& tree) {
           triangles += now - current[q];
           current[q] = now;
         }
+    for (std::int32_t g : patches_of[node])
+      if (--patch_waiting[g] == 0) triangles += tree.patch_group_first[g + 1] - tree.patch_group_first[g];
     lod.accumulated.push_back(triangles);
   }
-  // Full detail also shows the hole patches that sit between leaves.
-  lod.accumulated.back() += std::int64_t(tree.patch_triangles.size());
   return lod;
 }
 

@@ -75,6 +75,72 @@ class LatticeDistances {
   std::vector<float> values_;
 };
 
+// Groups the hole patches by hole (triangles joined by shared edges) and gives
+// each group the parents of the leaves along its rim.
+void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
+  auto key = [](std::int32_t a, std::int32_t b) {
+    return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
+  };
+  tree->patch_triangles.clear();
+  tree->patch_group_first = {0};
+  tree->patch_needs_first = {0};
+  tree->patch_needs.clear();
+  if (patches.empty()) return;
+  // Edge -> patch triangles (up to 2) and edge -> leaf node.
+  std::vector<std::pair<std::uint64_t, std::int32_t>> patch_edges;
+  for (std::size_t t = 0; t < patches.size(); ++t)
+    for (int k = 0; k < 3; ++k) patch_edges.push_back({key(patches[t][k], patches[t][(k + 1) % 3]), std::int32_t(t)});
+  std::sort(patch_edges.begin(), patch_edges.end());
+  std::vector<std::int32_t> group(patches.size());
+  std::iota(group.begin(), group.end(), 0);
+  auto find = [&](std::int32_t x) {
+    while (group[x] != x) x = group[x] = group[group[x]];
+    return x;
+  };
+  std::vector<std::uint64_t> rim;  // edges used by one patch triangle
+  std::vector<std::int32_t> rim_triangle;
+  for (std::size_t i = 0; i < patch_edges.size();) {
+    std::size_t j = i;
+    while (j < patch_edges.size() && patch_edges[j].first == patch_edges[i].first) ++j;
+    if (j - i == 1) rim.push_back(patch_edges[i].first), rim_triangle.push_back(patch_edges[i].second);
+    for (std::size_t k = i + 1; k < j; ++k) group[find(patch_edges[k].second)] = find(patch_edges[i].second);
+    i = j;
+  }
+  FlatHashMap edge_leaf(rim.size() * 2 + 16);
+  std::vector<std::uint8_t> is_rim_edge;
+  {
+    std::vector<std::uint64_t> sorted_rim = rim;
+    std::sort(sorted_rim.begin(), sorted_rim.end());
+    for (std::size_t node = 0; node < tree->size(); ++node) {
+      if (!tree->is_leaf(node)) continue;
+      for (std::int32_t t = 0; t < tree->triangle_counts[node]; ++t) {
+        const Triangle& tri = tree->triangles[std::size_t(tree->first_triangle[node] + t)];
+        for (int k = 0; k < 3; ++k) {
+          const std::uint64_t e = key(tri[k], tri[(k + 1) % 3]);
+          if (std::binary_search(sorted_rim.begin(), sorted_rim.end(), e)) edge_leaf.insert(e, std::int32_t(node));
+        }
+      }
+    }
+  }
+  std::vector<std::vector<std::int32_t>> needs(patches.size());
+  for (std::size_t i = 0; i < rim.size(); ++i) {
+    const std::int32_t leaf = edge_leaf.find(rim[i]);
+    if (leaf >= 0) needs[find(rim_triangle[i])].push_back(tree->parents[leaf]);
+  }
+  std::vector<std::vector<std::int32_t>> members(patches.size());
+  for (std::size_t t = 0; t < patches.size(); ++t) members[find(std::int32_t(t))].push_back(std::int32_t(t));
+  for (std::size_t g = 0; g < patches.size(); ++g) {
+    if (members[g].empty()) continue;
+    for (std::int32_t t : members[g]) tree->patch_triangles.push_back(patches[t]);
+    tree->patch_group_first.push_back(std::int32_t(tree->patch_triangles.size()));
+    auto& need = needs[g];
+    std::sort(need.begin(), need.end());
+    need.erase(std::unique(need.begin(), need.end()), need.end());
+    tree->patch_needs.insert(tree->patch_needs.end(), need.begin(), need.end());
+    tree->patch_needs_first.push_back(std::int32_t(tree->patch_needs.size()));
+  }
+}
+
 }  // namespace
 
 McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field) {
@@ -89,7 +155,6 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   tree.normals = mesh.normals;
   tree.colors = mesh.colors;
   tree.mesh_vertices = mesh.positions.size();
-  tree.patch_triangles = leaves.patch_triangles;
 
   // Keys per level, bottom-up; then ordered top-down so children are contiguous.
   std::vector<std::vector<std::uint64_t>> level_keys(depth + 1);
@@ -349,6 +414,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
       }
     }
   }
+  group_patches(leaves.patch_triangles, &tree);
+
   // Each node above the leaves gets a centre vertex for its transition fans:
   // the mean of its own crossings, or of its boundary's where it has none.
   tree.centre_vertices.assign(std::size_t(internal), -1);

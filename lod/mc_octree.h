@@ -53,7 +53,12 @@ struct McOctree {
   std::vector<std::array<std::int32_t, 27>> neighbours;  // node in each cell around (13: itself), or -1
 
   std::vector<Triangle> triangles;        // every node's own triangles
-  std::vector<Triangle> patch_triangles;  // the leaves' hole patches, shown with the leaves
+  // The leaves' hole patches (CubeNodes::patch_triangles), grouped by hole: a
+  // group shows once every node whose children hold its rim has expanded.
+  std::vector<Triangle> patch_triangles;
+  std::vector<std::int32_t> patch_group_first;  // groups + 1 offsets into patch_triangles
+  std::vector<std::int32_t> patch_needs_first;  // groups + 1 offsets into patch_needs
+  std::vector<std::int32_t> patch_needs;        // nodes that must be expanded
 
   // One vertex array for every level: the full mesh's vertices first.
   std::vector<Vec3f> positions;
@@ -64,6 +69,7 @@ struct McOctree {
   std::size_t size() const { return keys.size(); }
   bool is_leaf(std::size_t n) const { return first_child[n] < 0; }
   std::size_t internal_nodes() const { return centre_vertices.size(); }
+  std::size_t patch_groups() const { return patch_group_first.empty() ? 0 : patch_group_first.size() - 1; }
 };
 
 // Builds the octree over a reconstruction's leaf cube nodes and mesh.
