@@ -99,15 +99,14 @@ void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
   };
   std::vector<std::uint64_t> rim;  // edges used by one patch triangle
   std::vector<std::int32_t> rim_triangle;
-  for (std::size_t i = 0; i < patch_edges.size();) {
-    std::size_t j = i;
-    while (j < patch_edges.size() && patch_edges[j].first == patch_edges[i].first) ++j;
-    if (j - i == 1) rim.push_back(patch_edges[i].first), rim_triangle.push_back(patch_edges[i].second);
-    for (std::size_t k = i + 1; k < j; ++k) group[find(patch_edges[k].second)] = find(patch_edges[i].second);
-    i = j;
+  // Sorted, so the (one or two) uses of an edge are adjacent.
+  for (std::size_t i = 0; i < patch_edges.size(); ++i) {
+    const bool same_as_next = i + 1 < patch_edges.size() && patch_edges[i + 1].first == patch_edges[i].first;
+    const bool same_as_previous = i > 0 && patch_edges[i - 1].first == patch_edges[i].first;
+    if (same_as_next) group[find(patch_edges[i + 1].second)] = find(patch_edges[i].second);
+    if (!same_as_next && !same_as_previous) rim.push_back(patch_edges[i].first), rim_triangle.push_back(patch_edges[i].second);
   }
   FlatHashMap edge_leaf(rim.size() * 2 + 16);
-  std::vector<std::uint8_t> is_rim_edge;
   {
     std::vector<std::uint64_t> sorted_rim = rim;
     std::sort(sorted_rim.begin(), sorted_rim.end());
