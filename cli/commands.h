@@ -10,5 +10,8 @@ void add_reconstruct_command(CLI::App& app);
 void add_scan_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
+void add_build_command(CLI::App& app);    // lod/: scans -> .mco model
+void add_extract_command(CLI::App& app);  // .mco -> mesh at one level of detail
+void add_info_command(CLI::App& app);     // .mco -> levels and sizes
 
 }  // namespace scan2lod::cli

@@ -15,6 +15,9 @@ int main(int argc, char** argv) {
   scan2lod::cli::add_scan_command(app);
   scan2lod::cli::add_compare_command(app);
   scan2lod::cli::add_convert_command(app);
+  scan2lod::cli::add_build_command(app);
+  scan2lod::cli::add_extract_command(app);
+  scan2lod::cli::add_info_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,5 +1,6 @@
 #include "acquisition/load_inputs.h"
 #include "cli/commands.h"
+#include "cli/reconstruct_flags.h"
 #include "io/mesh_file.h"
 #include "reconstruct/marching_cubes.h"
 
@@ -13,8 +14,7 @@ void add_reconstruct_command(CLI::App& app) {
   struct Args {
     std::vector<std::string> inputs;
     std::string output;
-    std::string method = "planes";
-    ReconstructOptions options;
+    ReconstructFlags flags;
     bool verbose = false;
   };
   auto args = std::make_shared<Args>();
@@ -24,43 +24,18 @@ void add_reconstruct_command(CLI::App& app) {
                   "A .conf, range-grid PLYs, organized PCDs, or a mesh (.ply .obj .off .stl)")
       ->required();
   cmd->add_option("-o,--output", args->output, "Output mesh (.ply .obj .stl .off .vtp)")->required();
-  cmd->add_option("-r,--resolution", args->options.resolution, "Cubes per side (power of two)")
-      ->capture_default_str();
-  cmd->add_option("--margin", args->options.margin,
-                  "Cubes grown around point-holding cubes before surface following")
-      ->capture_default_str();
-  cmd->add_option("--distance", args->method, "Signed distance: planes, hoppe or seed")
-      ->capture_default_str();
-  cmd->add_option("--neighbours", args->options.distance.neighbours,
-                  "Points averaged by the planes distance")
-      ->capture_default_str();
-  cmd->add_option("--max-distance", args->options.distance.max_distance,
-                  "Corners farther than this many cube sizes (or sample spacings) from data stay undefined")
-      ->capture_default_str();
-  cmd->add_option("--reach", args->options.reach,
-                  "Cubes reached by following the surface are kept within this many cube sizes (or sample spacings) of data")
-      ->capture_default_str();
-  cmd->add_option("--min-piece", args->options.min_piece,
-                  "Remove pieces with less than this fraction of the triangles (0: keep all)")
-      ->capture_default_str();
-  cmd->add_option("--max-hole", args->options.max_hole,
-                  "Close holes whose rim has at most this many edges per cube of resolution (0: none)")
-      ->capture_default_str();
-  cmd->add_option("--hole-rounds", args->options.hole_rounds,
-                  "Rings of cubes a small hole is closed by from each side, at most")
-      ->capture_default_str();
-  cmd->add_option("-j,--threads", args->options.threads, "Threads (0: all cores)")->capture_default_str();
+  add_reconstruct_flags(cmd, &args->flags);
   cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each stage");
   cmd->callback([args] {
     using clock = std::chrono::steady_clock;
     const auto start = clock::now();
-    args->options.distance.method = parse_distance_method(args->method);
+    const ReconstructOptions& options = args->flags.resolve();
     check_mesh_output(args->output);
     AcquisitionOptions acquisition;
-    acquisition.threads = args->options.threads;
+    acquisition.threads = options.threads;
     OrientedPoints points = load_oriented_points(args->inputs, acquisition);
     const double read_seconds = std::chrono::duration<double>(clock::now() - start).count();
-    Reconstruction r = reconstruct(points, args->options);
+    Reconstruction r = reconstruct(points, options);
     const auto write_start = clock::now();
     write_mesh(args->output, r.mesh);
     if (args->verbose) {

@@ -1,0 +1,34 @@
+#include "cli/reconstruct_flags.h"
+
+namespace scan2lod::cli {
+
+const ReconstructOptions& ReconstructFlags::resolve() {
+  options.distance.method = parse_distance_method(method);
+  return options;
+}
+
+void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {
+  ReconstructOptions& o = flags->options;
+  cmd->add_option("-r,--resolution", o.resolution, "Cubes per side (power of two)")->capture_default_str();
+  cmd->add_option("--margin", o.margin, "Cubes grown around point-holding cubes before surface following")
+      ->capture_default_str();
+  cmd->add_option("--distance", flags->method, "Signed distance: planes, hoppe or seed")->capture_default_str();
+  cmd->add_option("--neighbours", o.distance.neighbours, "Points averaged by the planes distance")
+      ->capture_default_str();
+  cmd->add_option("--max-distance", o.distance.max_distance,
+                  "Corners farther than this many cube sizes (or sample spacings) from data stay undefined")
+      ->capture_default_str();
+  cmd->add_option("--reach", o.reach,
+                  "Cubes reached by following the surface are kept within this many cube sizes (or sample spacings) of data")
+      ->capture_default_str();
+  cmd->add_option("--min-piece", o.min_piece, "Remove pieces with less than this fraction of the triangles (0: keep all)")
+      ->capture_default_str();
+  cmd->add_option("--max-hole", o.max_hole,
+                  "Close holes whose rim has at most this many edges per cube of resolution (0: none)")
+      ->capture_default_str();
+  cmd->add_option("--hole-rounds", o.hole_rounds, "Rings of cubes a small hole is closed by from each side, at most")
+      ->capture_default_str();
+  cmd->add_option("-j,--threads", o.threads, "Threads (0: all cores)")->capture_default_str();
+}
+
+}  // namespace scan2lod::cli

@@ -1,0 +1,26 @@
+// The reconstruction flags that `reconstruct` and `build` share, mapped one to
+// one onto ReconstructOptions (reconstruct/marching_cubes.h).
+#pragma once
+
+#include "reconstruct/marching_cubes.h"
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace scan2lod::cli {
+
+struct ReconstructFlags {
+  ReconstructOptions options;
+  std::string method = "planes";  // --distance, parsed by resolve()
+
+  // Sets options.distance.method from `method`; throws for an unknown name.
+  const ReconstructOptions& resolve();
+};
+
+// Adds -r/--resolution, --margin, --distance, --neighbours, --max-distance,
+// --reach, --min-piece, --max-hole, --hole-rounds and -j/--threads to `cmd`,
+// with the options' defaults shown in --help. `flags` must outlive parsing.
+void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags);
+
+}  // namespace scan2lod::cli

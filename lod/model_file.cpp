@@ -1,0 +1,556 @@
+#include "lod/model_file.h"
+
+#include "core/error.h"
+#include "io/atomic_file.h"
+#include "lod/transition.h"
+#include "reconstruct/cube_table.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+#include <system_error>
+
+namespace scan2lod {
+
+// The arrays go to disk as they lie in memory; that is the file's byte order
+// only on little-endian hosts (every machine this project targets).
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the .mco reader and writer assume a little-endian host");
+static_assert(sizeof(Vec3f) == 12 && sizeof(Triangle) == 12 && sizeof(Rgb) == 3 &&
+                  sizeof(std::array<std::int32_t, 12>) == 48 &&
+                  sizeof(std::array<std::int32_t, kSubEdges>) == 4 * kSubEdges &&
+                  sizeof(std::array<std::int32_t, 27>) == 108,
+              "McOctree element types must be packed for the .mco layout");
+
+namespace {
+
+constexpr char kMagic[8] = {'S', 'C', 'A', 'N', '2', 'L', 'O', 'D'};
+constexpr std::size_t kHeaderBytes = 40;
+constexpr std::size_t kEntryBytes = 48;
+constexpr std::size_t kGridRecordBytes = 48;
+constexpr std::uint32_t kRequired = 1;
+
+constexpr std::uint32_t fourcc(const char (&s)[5]) {
+  return std::uint32_t(std::uint8_t(s[0])) | std::uint32_t(std::uint8_t(s[1])) << 8 |
+         std::uint32_t(std::uint8_t(s[2])) << 16 | std::uint32_t(std::uint8_t(s[3])) << 24;
+}
+
+std::string tag_name(std::uint32_t tag) {
+  std::string s;
+  for (int i = 0; i < 4; ++i) {
+    const char c = char((tag >> (8 * i)) & 0xff);
+    if (c < 0x20 || c > 0x7e) {
+      char hex[16];
+      std::snprintf(hex, sizeof hex, "0x%08x", tag);
+      return hex;
+    }
+    s += c;
+  }
+  return "'" + s + "'";
+}
+
+void put_u32(std::uint8_t* p, std::uint32_t v) { std::memcpy(p, &v, 4); }
+void put_u64(std::uint8_t* p, std::uint64_t v) { std::memcpy(p, &v, 8); }
+std::uint32_t get_u32(const std::uint8_t* p) {
+  std::uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+std::uint64_t get_u64(const std::uint8_t* p) {
+  std::uint64_t v;
+  std::memcpy(&v, p, 8);
+  return v;
+}
+
+std::uint64_t rotl(std::uint64_t x, int r) { return (x << r) | (x >> (64 - r)); }
+
+constexpr std::uint64_t kP1 = 0x9E3779B185EBCA87ull, kP2 = 0xC2B2AE3D27D4EB4Full, kP3 = 0x165667B19E3779F9ull,
+                        kP4 = 0x85EBCA77C2B2AE63ull, kP5 = 0x27D4EB2F165667C5ull;
+
+std::uint64_t xxh_round(std::uint64_t acc, std::uint64_t input) { return rotl(acc + input * kP2, 31) * kP1; }
+std::uint64_t xxh_merge(std::uint64_t acc, std::uint64_t v) { return (acc ^ xxh_round(0, v)) * kP1 + kP4; }
+
+// One section as the writer lays it out.
+struct OutSection {
+  std::uint32_t tag;
+  std::uint32_t element_size;
+  std::uint64_t count;
+  const void* data;
+};
+
+template <class T>
+OutSection out(const char (&tag)[5], const std::vector<T>& v) {
+  return {fourcc(tag), std::uint32_t(sizeof(T)), std::uint64_t(v.size()), v.data()};
+}
+
+// One directory entry as read.
+struct Section {
+  std::uint32_t tag, flags, element_size;
+  std::uint64_t count, offset, length, checksum;
+};
+
+std::uint64_t padded(std::uint64_t n) { return (n + 7) & ~std::uint64_t(7); }
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext;
+}
+
+}  // namespace
+
+std::uint64_t model_checksum(const void* data, std::size_t size, std::uint64_t seed) {
+  const auto* p = static_cast<const std::uint8_t*>(data);
+  const std::uint8_t* const end = p + size;
+  std::uint64_t h;
+  if (size >= 32) {
+    std::uint64_t v1 = seed + kP1 + kP2, v2 = seed + kP2, v3 = seed, v4 = seed - kP1;
+    for (const std::uint8_t* limit = end - 32; p <= limit; p += 32) {
+      v1 = xxh_round(v1, get_u64(p));
+      v2 = xxh_round(v2, get_u64(p + 8));
+      v3 = xxh_round(v3, get_u64(p + 16));
+      v4 = xxh_round(v4, get_u64(p + 24));
+    }
+    h = rotl(v1, 1) + rotl(v2, 7) + rotl(v3, 12) + rotl(v4, 18);
+    h = xxh_merge(xxh_merge(xxh_merge(xxh_merge(h, v1), v2), v3), v4);
+  } else {
+    h = seed + kP5;
+  }
+  h += std::uint64_t(size);
+  for (; p + 8 <= end; p += 8) h = rotl(h ^ xxh_round(0, get_u64(p)), 27) * kP1 + kP4;
+  if (p + 4 <= end) {
+    h = rotl(h ^ std::uint64_t(get_u32(p)) * kP1, 23) * kP2 + kP3;
+    p += 4;
+  }
+  for (; p < end; ++p) h = rotl(h ^ std::uint64_t(*p) * kP5, 11) * kP1;
+  h ^= h >> 33;
+  h *= kP2;
+  h ^= h >> 29;
+  h *= kP3;
+  h ^= h >> 32;
+  return h;
+}
+
+std::vector<std::uint8_t> encode_model(const LodModel& model) {
+  const McOctree& t = model.tree;
+  std::vector<std::uint8_t> grid(kGridRecordBytes, 0);
+  for (int i = 0; i < 3; ++i) std::memcpy(grid.data() + 8 * i, &t.grid.origin[i], 8);
+  std::memcpy(grid.data() + 24, &t.grid.cube_size, 8);
+  const std::int32_t resolution = t.grid.resolution, depth = t.depth;
+  std::memcpy(grid.data() + 32, &resolution, 4);
+  std::memcpy(grid.data() + 36, &depth, 4);
+  put_u64(grid.data() + 40, std::uint64_t(t.mesh_vertices));
+
+  const OutSection sections[] = {
+      {fourcc("GRID"), std::uint32_t(kGridRecordBytes), 1, grid.data()},
+      out("KEYS", t.keys),
+      out("LEVL", t.levels),
+      out("PRNT", t.parents),
+      out("FCHD", t.first_child),
+      out("NCHD", t.child_counts),
+      out("CASE", t.cases),
+      out("EDGV", t.edge_vertices),
+      out("FTRI", t.first_triangle),
+      out("NTRI", t.triangle_counts),
+      out("METR", t.metrics),
+      out("BINS", t.boundary_inside),
+      out("SUBV", t.sub_edge_vertices),
+      out("CNTR", t.centre_vertices),
+      out("NBRS", t.neighbours),
+      out("TRIS", t.triangles),
+      out("PTRI", t.patch_triangles),
+      out("PGRP", t.patch_group_first),
+      out("PNDF", t.patch_needs_first),
+      out("PNDS", t.patch_needs),
+      out("POSN", t.positions),
+      out("NRML", t.normals),
+      out("COLR", t.colors),
+      out("LODO", model.lod.order),
+      out("LODA", model.lod.accumulated),
+  };
+  const std::size_t count = sizeof sections / sizeof sections[0];
+  const std::uint64_t directory_end = kHeaderBytes + kEntryBytes * count + 8;
+  std::uint64_t length = directory_end;
+  for (const OutSection& s : sections) length = padded(length + s.element_size * s.count);
+  length += 8;
+
+  std::vector<std::uint8_t> bytes(length, 0);
+  std::uint8_t* header = bytes.data();
+  std::memcpy(header, kMagic, 8);
+  put_u32(header + 8, kModelFormatMajor);
+  put_u32(header + 12, kModelFormatMinor);
+  put_u32(header + 16, std::uint32_t(count));
+  put_u32(header + 20, 0);
+  put_u64(header + 24, length);
+  put_u64(header + 32, model_checksum(header, 32));
+  std::uint64_t offset = directory_end;
+  for (std::size_t i = 0; i < count; ++i) {
+    const OutSection& s = sections[i];
+    const std::uint64_t size = s.element_size * s.count;
+    if (size) std::memcpy(bytes.data() + offset, s.data, size);
+    std::uint8_t* e = bytes.data() + kHeaderBytes + kEntryBytes * i;
+    put_u32(e, s.tag);
+    put_u32(e + 4, kRequired);
+    put_u32(e + 8, s.element_size);
+    put_u32(e + 12, 0);
+    put_u64(e + 16, s.count);
+    put_u64(e + 24, offset);
+    put_u64(e + 32, size);
+    put_u64(e + 40, model_checksum(bytes.data() + offset, size));
+    offset = padded(offset + size);
+  }
+  put_u64(bytes.data() + directory_end - 8, model_checksum(bytes.data() + kHeaderBytes, kEntryBytes * count));
+  put_u64(bytes.data() + length - 8, model_checksum(bytes.data(), length - 8));
+  return bytes;
+}
+
+void check_model_output(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  if (ext != ".mco") throw InputError(path, "a model file needs the extension .mco, got '" + ext + "'");
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  std::error_code ec;
+  if (!folder.empty() && !std::filesystem::is_directory(folder, ec))
+    throw InputError(path, "cannot write: folder " + folder.string() + " does not exist");
+}
+
+void save_model(const std::string& path, const LodModel& model) {
+  check_model_output(path);
+  const std::vector<std::uint8_t> bytes = encode_model(model);
+  write_atomically(path, [&](const std::string& tmp) {
+    FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f) throw InputError(path, std::string("cannot write: ") + std::strerror(errno));
+    const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+    const int error = errno;
+    if (std::fclose(f) != 0 || !written)
+      throw InputError(path, std::string("cannot write: ") + std::strerror(written ? errno : error));
+  });
+}
+
+LodModel load_model(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, "cannot read the model: no such file");
+  if (!fs::is_regular_file(path, ec)) throw InputError(path, "cannot read the model: not a regular file");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) throw InputError(path, "cannot read the model: " + ec.message());
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw InputError(path, std::string("cannot read the model: ") + std::strerror(errno));
+  // Not zeroed first: every byte is read over.
+  const std::unique_ptr<std::uint8_t[]> bytes(new std::uint8_t[std::max<std::uintmax_t>(size, 1)]);
+  const std::size_t got = size ? std::fread(bytes.get(), 1, size, f) : 0;
+  std::fclose(f);
+  if (got != size)
+    throw InputError(path, "cannot read the model: read " + std::to_string(got) + " of " + std::to_string(size) + " bytes");
+  return decode_model(bytes.get(), size, path);
+}
+
+LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& source) {
+  auto fail = [&](const std::string& what) { throw InputError(source, what); };
+  auto bytes = [](std::uint64_t n) { return std::to_string(n) + (n == 1 ? " byte" : " bytes"); };
+
+  // Header: what the file is, before anything is trusted.
+  if (size == 0) fail("not a scan2lod model (.mco): the file is empty");
+  if (std::memcmp(data, kMagic, std::min<std::size_t>(size, 8)) != 0)
+    fail("not a scan2lod model (.mco): bad magic, the file does not start with \"SCAN2LOD\"");
+  if (size < kHeaderBytes) fail("truncated in the header: " + bytes(size) + " of " + std::to_string(kHeaderBytes));
+  if (model_checksum(data, 32) != get_u64(data + 32)) fail("checksum mismatch in the header (damaged file)");
+  const std::uint32_t major = get_u32(data + 8), minor = get_u32(data + 12);
+  if (major > kModelFormatMajor)
+    fail("written by a newer scan2lod (format " + std::to_string(major) + "." + std::to_string(minor) +
+         ", this reads up to " + std::to_string(kModelFormatMajor) + ")");
+  if (major == 0) fail("format version 0 was never written by scan2lod");
+  const std::string format = "format " + std::to_string(major) + "." + std::to_string(minor);
+  const std::uint64_t section_count = get_u32(data + 16);
+  const std::uint64_t file_length = get_u64(data + 24);
+  const std::uint64_t directory_end = kHeaderBytes + kEntryBytes * section_count + 8;
+  if (file_length < directory_end + 8)
+    fail("the header's file length " + std::to_string(file_length) + " cannot hold " +
+         std::to_string(section_count) + " sections");
+
+  // Directory: where each section lies; all of it inside the stated length.
+  if (size < directory_end)
+    fail("truncated in the section directory: " + bytes(size) + " of " + std::to_string(file_length));
+  if (model_checksum(data + kHeaderBytes, kEntryBytes * section_count) != get_u64(data + directory_end - 8))
+    fail("checksum mismatch in the section directory (damaged file)");
+  std::vector<Section> sections(section_count);
+  for (std::size_t i = 0; i < section_count; ++i) {
+    const std::uint8_t* e = data + kHeaderBytes + kEntryBytes * i;
+    Section& s = sections[i];
+    s = {get_u32(e), get_u32(e + 4), get_u32(e + 8), get_u64(e + 16), get_u64(e + 24), get_u64(e + 32), get_u64(e + 40)};
+    const std::string name = "section " + tag_name(s.tag);
+    if (s.element_size == 0 || s.count > std::numeric_limits<std::uint64_t>::max() / s.element_size ||
+        s.count * s.element_size != s.length)
+      fail(name + ": " + std::to_string(s.count) + " elements of " + bytes(s.element_size) + " do not make its " +
+           bytes(s.length));
+    if (s.offset < directory_end || s.offset > file_length - 8 || s.length > file_length - 8 - s.offset)
+      fail(name + ": its " + bytes(s.length) + " at offset " + std::to_string(s.offset) +
+           " lie outside the model's " + bytes(file_length));
+  }
+
+  // Length: a short file is truncated somewhere; say where.
+  if (size < file_length) {
+    const Section* cut = nullptr;
+    for (const Section& s : sections)
+      if (s.offset + s.length > size && (!cut || s.offset < cut->offset)) cut = &s;
+    fail("truncated in " + (cut ? "section " + tag_name(cut->tag) : std::string("the trailing checksum")) + ": " +
+         bytes(size) + " of " + std::to_string(file_length));
+  }
+  if (size > file_length) fail(bytes(size - file_length) + " after the end of the model (" + bytes(file_length) + ")");
+  for (const Section& s : sections)
+    if (model_checksum(data + s.offset, s.length) != s.checksum)
+      fail("checksum mismatch in section " + tag_name(s.tag) + " (damaged file)");
+  if (model_checksum(data, file_length - 8) != get_u64(data + file_length - 8))
+    fail("checksum mismatch over the whole file (damaged padding)");
+
+  // Sections by tag: each known one once; unknown ones only if optional.
+  std::map<std::uint32_t, const Section*> by_tag;
+  for (const Section& s : sections)
+    if (!by_tag.emplace(s.tag, &s).second) fail("section " + tag_name(s.tag) + " appears twice");
+  const std::uint32_t known[] = {
+      fourcc("GRID"), fourcc("KEYS"), fourcc("LEVL"), fourcc("PRNT"), fourcc("FCHD"), fourcc("NCHD"), fourcc("CASE"),
+      fourcc("EDGV"), fourcc("FTRI"), fourcc("NTRI"), fourcc("METR"), fourcc("BINS"), fourcc("SUBV"), fourcc("CNTR"),
+      fourcc("NBRS"), fourcc("TRIS"), fourcc("PTRI"), fourcc("PGRP"), fourcc("PNDF"), fourcc("PNDS"), fourcc("POSN"),
+      fourcc("NRML"), fourcc("COLR"), fourcc("LODO"), fourcc("LODA")};
+  for (const Section& s : sections)
+    if ((s.flags & kRequired) && std::find(std::begin(known), std::end(known), s.tag) == std::end(known))
+      fail("needs section " + tag_name(s.tag) + ", which this scan2lod does not know (" + format + ", this reads " +
+           std::to_string(kModelFormatMajor) + "." + std::to_string(kModelFormatMinor) + "): written by a newer scan2lod");
+  auto section = [&](const char(&tag)[5]) -> const Section& {
+    auto it = by_tag.find(fourcc(tag));
+    if (it == by_tag.end()) throw InputError(source, "missing section '" + std::string(tag) + "'");
+    return *it->second;
+  };
+  auto read = [&](const char(&tag)[5], auto* v) {
+    using T = typename std::remove_pointer_t<decltype(v)>::value_type;
+    const Section& s = section(tag);
+    if (s.element_size != sizeof(T))
+      fail("section '" + std::string(tag) + "' has elements of " + bytes(s.element_size) + ", expected " +
+           std::to_string(sizeof(T)));
+    v->resize(s.count);  // s.length bytes, inside the file: bounded by its size
+    if (s.length) std::memcpy(static_cast<void*>(v->data()), data + s.offset, s.length);
+  };
+
+  LodModel model;
+  McOctree& t = model.tree;
+  {
+    const Section& s = section("GRID");
+    if (s.count != 1 || s.element_size < kGridRecordBytes)
+      fail("section 'GRID' must be one record of at least " + std::to_string(kGridRecordBytes) + " bytes");
+    const std::uint8_t* g = data + s.offset;
+    for (int i = 0; i < 3; ++i) std::memcpy(&t.grid.origin[i], g + 8 * i, 8);
+    std::memcpy(&t.grid.cube_size, g + 24, 8);
+    std::int32_t resolution, depth;
+    std::memcpy(&resolution, g + 32, 4);
+    std::memcpy(&depth, g + 36, 4);
+    t.grid.resolution = resolution;
+    t.depth = depth;
+    t.mesh_vertices = std::size_t(get_u64(g + 40));
+  }
+  read("KEYS", &t.keys);
+  read("LEVL", &t.levels);
+  read("PRNT", &t.parents);
+  read("FCHD", &t.first_child);
+  read("NCHD", &t.child_counts);
+  read("CASE", &t.cases);
+  read("EDGV", &t.edge_vertices);
+  read("FTRI", &t.first_triangle);
+  read("NTRI", &t.triangle_counts);
+  read("METR", &t.metrics);
+  read("BINS", &t.boundary_inside);
+  read("SUBV", &t.sub_edge_vertices);
+  read("CNTR", &t.centre_vertices);
+  read("NBRS", &t.neighbours);
+  read("TRIS", &t.triangles);
+  read("PTRI", &t.patch_triangles);
+  read("PGRP", &t.patch_group_first);
+  read("PNDF", &t.patch_needs_first);
+  read("PNDS", &t.patch_needs);
+  read("POSN", &t.positions);
+  read("NRML", &t.normals);
+  read("COLR", &t.colors);
+  read("LODO", &model.lod.order);
+  read("LODA", &model.lod.accumulated);
+
+  // Contents: everything extraction indexes must be in range, and the tree a
+  // tree, so that a crafted file cannot make it read out of bounds.
+  auto bad = [&](const std::string& what) { fail("inconsistent model: " + what); };
+  constexpr std::size_t kMaxIndex = std::size_t(std::numeric_limits<std::int32_t>::max());
+  const std::size_t n = t.keys.size();
+  if (n == 0) bad("the octree has no nodes");
+  if (n > kMaxIndex) bad(std::to_string(n) + " nodes, more than 32-bit indices address");
+  auto per_node = [&](const char* tag, std::size_t count) {
+    if (count != n)
+      bad("section '" + std::string(tag) + "' has " + std::to_string(count) + " entries for the " + std::to_string(n) +
+          " nodes of 'KEYS'");
+  };
+  per_node("LEVL", t.levels.size());
+  per_node("PRNT", t.parents.size());
+  per_node("FCHD", t.first_child.size());
+  per_node("NCHD", t.child_counts.size());
+  per_node("CASE", t.cases.size());
+  per_node("EDGV", t.edge_vertices.size());
+  per_node("FTRI", t.first_triangle.size());
+  per_node("NTRI", t.triangle_counts.size());
+  per_node("METR", t.metrics.size());
+  if (t.depth < 0 || t.depth > 19 || t.grid.resolution != (1 << t.depth))
+    bad("resolution " + std::to_string(t.grid.resolution) + " is not 2^depth for depth " + std::to_string(t.depth));
+  if (!t.grid.origin.allFinite() || !std::isfinite(t.grid.cube_size) || !(t.grid.cube_size > 0))
+    bad("the grid's origin and cube size must be finite, the cube size positive");
+  const std::size_t vertices = t.positions.size();
+  if (vertices > kMaxIndex) bad(std::to_string(vertices) + " vertices, more than 32-bit indices address");
+  if (t.mesh_vertices > vertices)
+    bad("mesh_vertices " + std::to_string(t.mesh_vertices) + " exceeds the " + std::to_string(vertices) + " vertices");
+  if (!t.normals.empty() && t.normals.size() != vertices)
+    bad(std::to_string(t.normals.size()) + " normals for " + std::to_string(vertices) + " vertices");
+  if (!t.colors.empty() && t.colors.size() != vertices)
+    bad(std::to_string(t.colors.size()) + " colours for " + std::to_string(vertices) + " vertices");
+  if (t.triangles.size() > kMaxIndex) bad("more triangles than 32-bit indices address");
+  auto check_triangles = [&](const char* tag, const std::vector<Triangle>& tris) {
+    for (std::size_t i = 0; i < tris.size(); ++i)
+      for (std::int32_t v : tris[i])
+        if (v < 0 || std::size_t(v) >= vertices)
+          bad("section '" + std::string(tag) + "': triangle " + std::to_string(i) + " names vertex " +
+              std::to_string(v) + " of " + std::to_string(vertices));
+  };
+  check_triangles("TRIS", t.triangles);
+  check_triangles("PTRI", t.patch_triangles);
+
+  // Hole patches by group: offsets that run from 0 to the end of their array.
+  auto check_offsets = [&](const char* tag, const std::vector<std::int32_t>& first, std::size_t total,
+                           const char* of) {
+    if (first.empty() ? total != 0 : first.front() != 0 || std::size_t(first.back()) != total ||
+                                         !std::is_sorted(first.begin(), first.end()))
+      bad("section '" + std::string(tag) + "' does not run from 0 to the " + std::to_string(total) + " entries of '" +
+          of + "' in order");
+  };
+  if (t.patch_group_first.empty() && !t.patch_triangles.empty())
+    bad("patch triangles without groups ('PGRP' is empty)");
+  check_offsets("PGRP", t.patch_group_first, t.patch_triangles.size(), "PTRI");
+  if (t.patch_needs_first.size() != t.patch_group_first.size())
+    bad("section 'PNDF' has " + std::to_string(t.patch_needs_first.size()) + " entries, 'PGRP' " +
+        std::to_string(t.patch_group_first.size()));
+  check_offsets("PNDF", t.patch_needs_first, t.patch_needs.size(), "PNDS");
+  for (std::int32_t v : t.patch_needs)
+    if (v < 0 || std::size_t(v) >= n) bad("section 'PNDS' names node " + std::to_string(v) + " of " + std::to_string(n));
+
+  if (t.parents[0] != -1 || t.levels[0] != 0 || t.keys[0] != 0) bad("node 0 is not the root");
+  std::size_t internal = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    auto node = [i] { return "node " + std::to_string(i) + ": "; };  // built only on failure
+    const int level = t.levels[i];
+    if (level > t.depth) bad(node() + "level " + std::to_string(level) + " below the leaves' " + std::to_string(t.depth));
+    if (t.keys[i] >> 60) bad(node() + "key out of range");
+    int x, y, z;
+    unpack_key(t.keys[i], &x, &y, &z);
+    if (std::max({x, y, z}) >= (1 << level)) bad(node() + "key outside its level's lattice");
+    if (i > 0) {
+      const std::int32_t p = t.parents[i];
+      if (p < 0 || std::size_t(p) >= n) bad(node() + "parent " + std::to_string(p) + " of " + std::to_string(n) + " nodes");
+      if (t.first_child[p] < 0 || std::size_t(t.first_child[p]) > i ||
+          i >= std::size_t(t.first_child[p]) + t.child_counts[p])
+        bad(node() + "not among its parent " + std::to_string(p) + "'s children");
+    }
+    if (t.first_child[i] < 0) {
+      if (t.child_counts[i] != 0 || level != t.depth) bad(node() + "a leaf must sit at the depth with no children");
+    } else {
+      ++internal;
+      const std::size_t first = std::size_t(t.first_child[i]);
+      if (t.child_counts[i] < 1 || t.child_counts[i] > 8 || first + t.child_counts[i] > n)
+        bad(node() + "children " + std::to_string(first) + "+" + std::to_string(t.child_counts[i]) +
+            " are not 1 to 8 of the " + std::to_string(n) + " nodes");
+      for (std::size_t c = first; c < first + t.child_counts[i]; ++c) {
+        int cx, cy, cz;
+        unpack_key(t.keys[c], &cx, &cy, &cz);
+        if (t.parents[c] != std::int32_t(i) || t.levels[c] != level + 1 || cx >> 1 != x || cy >> 1 != y ||
+            cz >> 1 != z)
+          bad(node() + "child " + std::to_string(c) + " does not lie inside it on the next level");
+      }
+    }
+    if (t.first_triangle[i] < 0 ||
+        std::size_t(t.first_triangle[i]) + t.triangle_counts[i] > t.triangles.size())
+      bad(node() + "triangles " + std::to_string(t.first_triangle[i]) + "+" + std::to_string(t.triangle_counts[i]) +
+          " past the " + std::to_string(t.triangles.size()) + " of 'TRIS'");
+    for (std::int32_t v : t.edge_vertices[i])
+      if (v < -1 || (v >= 0 && std::size_t(v) >= vertices))
+        bad(node() + "edge vertex " + std::to_string(v) + " of " + std::to_string(vertices));
+  }
+
+  // Crack patching (lod/transition.h): the internal nodes come first, and
+  // every crossing the transition triangulation can join has a vertex.
+  const std::size_t with_transitions = t.centre_vertices.size();
+  if (with_transitions != internal)
+    bad("section 'CNTR' has " + std::to_string(with_transitions) + " entries for the " + std::to_string(internal) +
+        " internal nodes");
+  auto per_internal = [&](const char* tag, std::size_t count) {
+    if (count != internal)
+      bad("section '" + std::string(tag) + "' has " + std::to_string(count) + " entries for the " +
+          std::to_string(internal) + " internal nodes");
+  };
+  per_internal("BINS", t.boundary_inside.size());
+  per_internal("SUBV", t.sub_edge_vertices.size());
+  per_internal("NBRS", t.neighbours.size());
+  const auto& sub_edges = transition_sub_edges();
+  auto vertex_ok = [&](std::int32_t v) { return v >= -1 && (v < 0 || std::size_t(v) < vertices); };
+  int corner_point[8], edge_ends[12][2];
+  for (int c = 0; c < 8; ++c) corner_point[c] = lattice_of_corner(c);
+  for (int e = 0; e < 12; ++e)
+    for (int end = 0; end < 2; ++end) edge_ends[e][end] = corner_point[edge_corner(e, end)];
+  for (std::size_t i = 0; i < internal; ++i) {
+    auto node = [i] { return "node " + std::to_string(i) + ": "; };  // built only on failure
+    if (t.first_child[i] < 0) bad(node() + "a leaf among the first " + std::to_string(internal) + " nodes");
+    const std::uint32_t inside = t.boundary_inside[i];
+    if (inside >> 27) bad(node() + "boundary signs beyond the 27 lattice points");
+    auto in = [&](int p) { return (inside >> p) & 1; };
+    bool crossing = false;
+    for (int c = 0; c < 8; ++c)
+      if (std::uint32_t(in(corner_point[c])) != std::uint32_t((t.cases[i] >> c) & 1))
+        bad(node() + "boundary signs disagree with its case at corner " + std::to_string(c));
+    for (int e = 0; e < 12; ++e)
+      if (in(edge_ends[e][0]) != in(edge_ends[e][1])) {
+        crossing = true;
+        if (t.edge_vertices[i][e] < 0) bad(node() + "edge " + std::to_string(e) + " changes sign without a vertex");
+      }
+    for (int e = 0; e < kSubEdges; ++e) {
+      const std::int32_t v = t.sub_edge_vertices[i][e];
+      if (!vertex_ok(v)) bad(node() + "sub-edge vertex " + std::to_string(v) + " of " + std::to_string(vertices));
+      if (in(sub_edges[e].a) != in(sub_edges[e].b)) {
+        crossing = true;
+        if (v < 0) bad(node() + "sub-edge " + std::to_string(e) + " changes sign without a vertex");
+      }
+    }
+    const std::int32_t centre = t.centre_vertices[i];
+    if (!vertex_ok(centre) || (crossing && centre < 0))
+      bad(node() + "centre vertex " + std::to_string(centre) + " of " + std::to_string(vertices));
+    for (std::int32_t m : t.neighbours[i])
+      if (m < -1 || (m >= 0 && std::size_t(m) >= n)) bad(node() + "neighbour " + std::to_string(m) + " of " + std::to_string(n));
+  }
+
+  // The LOD array: every internal node once, parents first (§5.2).
+  const LodArray& lod = model.lod;
+  if (lod.order.size() != internal)
+    bad("the LOD array has " + std::to_string(lod.order.size()) + " entries for " + std::to_string(internal) +
+        " internal nodes");
+  if (lod.accumulated.size() != internal + 1)
+    bad("the accumulation table has " + std::to_string(lod.accumulated.size()) + " entries, expected " +
+        std::to_string(internal + 1));
+  std::vector<std::uint8_t> expanded(n, 0);
+  for (std::size_t k = 0; k < lod.order.size(); ++k) {
+    const std::int32_t v = lod.order[k];
+    auto entry = [k] { return "LOD array entry " + std::to_string(k) + ": "; };
+    if (v < 0 || std::size_t(v) >= n || t.first_child[v] < 0)
+      bad(entry() + "node " + std::to_string(v) + " is not an internal node");
+    if (expanded[v]) bad(entry() + "node " + std::to_string(v) + " expands twice");
+    if (k == 0 ? v != 0 : !expanded[t.parents[v]]) bad(entry() + "node " + std::to_string(v) + " expands before its parent");
+    expanded[v] = 1;
+  }
+  for (std::size_t k = 0; k < lod.accumulated.size(); ++k)
+    if (lod.accumulated[k] < 0) bad("accumulation table entry " + std::to_string(k) + " is negative");
+  return model;
+}
+
+}  // namespace scan2lod

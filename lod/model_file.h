@@ -1,0 +1,93 @@
+// The LOD model on disk (`.mco`): a prioritized marching-cube octree with its
+// LOD array and accumulation table (seed 003 §6.1), so that a mesh of any size
+// is taken from a file without rebuilding anything.
+//
+// Layout (every number little-endian; checksums are XXH64, seed 0):
+//
+//   header, 40 bytes
+//     0  char[8] magic "SCAN2LOD"
+//     8  u32     major format version (a reader rejects majors it does not know)
+//    12  u32     minor format version (new optional sections only)
+//    16  u32     section count S
+//    20  u32     flags, 0
+//    24  u64     file length in bytes, trailer included
+//    32  u64     checksum of bytes 0..31
+//   directory, S entries of 48 bytes, then a u64 checksum of the entries
+//     0  u32 tag (fourcc: 'K','E','Y','S' is "KEYS")
+//     4  u32 flags: bit 0 = required (a reader that does not know the tag must
+//            reject the file; unknown sections without it are skipped)
+//     8  u32 element size in bytes
+//    12  u32 reserved, 0
+//    16  u64 element count
+//    24  u64 payload offset from the start of the file (a multiple of 8)
+//    32  u64 payload length = element size * element count
+//    40  u64 checksum of the payload
+//   payloads, each zero-padded to 8 bytes
+//   trailer: u64 checksum of every byte before it
+//
+// Bytes 0..15 and 32..39 keep their meaning in every future version, so any
+// reader can tell a damaged file from a newer one. Sections of format 1.0, all
+// required (count n = nodes unless said otherwise):
+//   GRID  1 record of 48 bytes: f64 origin[3], f64 cube size, i32 resolution,
+//         i32 depth, u64 mesh_vertices (a longer record from a newer minor
+//         version is read by its first 48 bytes)
+//   KEYS u64, LEVL u8, PRNT i32, FCHD i32, NCHD u8, CASE u8, EDGV i32[12],
+//   FTRI i32, NTRI u8, METR f32           McOctree's per-node arrays
+//   BINS u32, SUBV i32[48], CNTR i32,
+//   NBRS i32[27]                           crack patching, per internal node
+//   TRIS i32[3], PTRI i32[3]               triangles, patch_triangles
+//   PGRP i32, PNDF i32, PNDS i32           patch_group_first, patch_needs_first, patch_needs
+//   POSN f32[3], NRML f32[3], COLR u8[3]   vertices (NRML, COLR: 0 or POSN's count)
+//   LODO i32, LODA i64                     LodArray::order, ::accumulated
+// A new array is a new tag (in encode_model, the known list, decode_model's
+// reads and its checks). When older readers can still draw the model without
+// it, the writer marks it optional and bumps the minor version; otherwise it is
+// required and the major version goes up.
+#pragma once
+
+#include "lod/lod_array.h"
+#include "lod/mc_octree.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace scan2lod {
+
+struct LodModel {
+  McOctree tree;
+  LodArray lod;
+};
+
+constexpr std::uint32_t kModelFormatMajor = 1;
+constexpr std::uint32_t kModelFormatMinor = 0;
+
+// Writes `model` to `path` (extension .mco) through a temporary file renamed
+// into place (write_atomically): a failure leaves nothing under `path`.
+// Throws InputError for another extension, a missing folder or a failed write.
+void save_model(const std::string& path, const LodModel& model);
+
+// Reads and validates a model written by save_model. Throws InputError naming
+// the file and what is wrong: not a model (bad magic), truncated (naming the
+// section), a checksum mismatch (naming the section), a newer major format,
+// or contents that disagree (array lengths against the node count, child,
+// parent, triangle, vertex, neighbour or LOD indices out of range, a sign
+// change on a node's boundary without a vertex), so that extract_lod and
+// compact_lod cannot read out of bounds on a loaded model. Peak memory is
+// about twice the file's size, whatever its counts claim.
+LodModel load_model(const std::string& path);
+
+// The bytes save_model writes (held in memory whole), and their reading
+// (`source` names them in errors); load_model is read-the-file plus decode_model.
+std::vector<std::uint8_t> encode_model(const LodModel& model);
+LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& source);
+
+// Throws InputError unless save_model could write `path`: extension .mco
+// (any case) in an existing folder. Commands call it before long work.
+void check_model_output(const std::string& path);
+
+// XXH64 (Yann Collet's xxHash, 64-bit) of `size` bytes: the file's checksum.
+std::uint64_t model_checksum(const void* data, std::size_t size, std::uint64_t seed = 0);
+
+}  // namespace scan2lod

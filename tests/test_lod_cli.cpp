@@ -1,0 +1,202 @@
+// The LOD commands (build, info, extract) through the real binary: the model
+// built from the bundled bunny reports its levels, extraction gives the mesh
+// sizes info promised, and bad input ends in a clear error and no file.
+#include "io/mesh_file.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int status;
+  std::string output;  // stdout and stderr
+};
+
+CliRun run(const std::string& args, bool merge_stderr = true) {
+  const std::string command = std::string(SCAN2LOD_CLI) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
+  FILE* pipe = popen(command.c_str(), "r");
+  CliRun r{-1, ""};
+  if (!pipe) return r;
+  std::array<char, 4096> buffer;
+  std::size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
+  r.status = pclose(pipe);
+  return r;
+}
+
+// A folder for this process's files, removed when the tests exit.
+fs::path scratch() {
+  struct Folder {
+    fs::path path = fs::temp_directory_path() / ("scan2lod_lod_cli_" + std::to_string(::getpid()));
+    ~Folder() {
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  };
+  static const Folder folder;
+  fs::create_directories(folder.path);
+  return folder.path;
+}
+
+const std::string kScans = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf";
+
+// The bunny at R = 64, built once by `scan2lod build`.
+const fs::path& bunny_model() {
+  static const fs::path path = [] {
+    const fs::path p = scratch() / "bunny64.mco";
+    const CliRun r = run("build " + kScans + " -o " + p.string() + " -r 64 -q");
+    EXPECT_EQ(r.status, 0) << r.output;
+    return p;
+  }();
+  return path;
+}
+
+std::size_t files_in(const fs::path& dir) {
+  return std::size_t(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+}  // namespace
+
+TEST(LodCli, BuildPrintsAOneLineSummary) {
+  const fs::path model = scratch() / "summary.mco";
+  const CliRun r = run("build " + kScans + " -o " + model.string() + " -r 32 --quiet");
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* word : {"358808 points", "leaves", "nodes", "expansions", "triangles at 100%", "reconstruct",
+                           "octree"})
+    EXPECT_NE(r.output.find(word), std::string::npos) << word << " missing from: " << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_GT(fs::file_size(model), 10000u);
+}
+
+TEST(LodCli, InfoAndExtractAgreeOnTheBunny) {
+  const fs::path& model = bunny_model();
+  ASSERT_TRUE(fs::exists(model));
+  const CliRun info = run("info " + model.string() + " --json", false);
+  ASSERT_EQ(info.status, 0) << info.output;
+  const nlohmann::json j = nlohmann::json::parse(info.output);
+  EXPECT_EQ(j.at("resolution").get<int>(), 64);
+  EXPECT_EQ(j.at("depth").get<int>(), 6);
+  const auto per_level = j.at("nodes_per_level").get<std::vector<std::size_t>>();
+  ASSERT_EQ(per_level.size(), 7u);
+  EXPECT_EQ(per_level[0], 1u);
+  for (std::size_t l = 1; l < per_level.size(); ++l) EXPECT_GE(per_level[l], per_level[l - 1]) << "level " << l;
+  EXPECT_EQ(j.at("leaves").get<std::size_t>(), per_level.back());
+  std::size_t nodes = 0;
+  for (std::size_t c : per_level) nodes += c;
+  EXPECT_EQ(j.at("nodes").get<std::size_t>(), nodes);
+  EXPECT_EQ(j.at("expansions").get<std::size_t>(), nodes - per_level.back());
+
+  const auto& lods = j.at("levels_of_detail");
+  ASSERT_EQ(lods.size(), 8u);
+  const double percents[] = {100, 80, 60, 40, 20, 10, 5, 1};
+  for (std::size_t i = 0; i < 8; ++i) {
+    EXPECT_EQ(lods[i].at("percent").get<double>(), percents[i]);
+    EXPECT_GT(lods[i].at("vertices").get<std::size_t>(), 0u);
+    if (i > 0) {
+      EXPECT_LT(lods[i].at("priority").get<std::size_t>(), lods[i - 1].at("priority").get<std::size_t>());
+      EXPECT_LE(lods[i].at("triangles").get<std::size_t>(), lods[i - 1].at("triangles").get<std::size_t>())
+          << percents[i] << "% has more triangles than " << percents[i - 1] << "%";
+    }
+  }
+  EXPECT_EQ(lods[0].at("priority").get<std::size_t>(), j.at("expansions").get<std::size_t>());
+  const std::size_t full = lods[0].at("triangles").get<std::size_t>(), fifth = lods[4].at("triangles").get<std::size_t>();
+  EXPECT_GT(full, 2 * fifth);
+  EXPECT_GT(full, 10000u);
+
+  // --percent 100 writes the full mesh that info counted.
+  const fs::path out = scratch() / "full.ply";
+  const CliRun x = run("extract " + model.string() + " --percent 100 -o " + out.string() + " --json", false);
+  ASSERT_EQ(x.status, 0) << x.output;
+  const nlohmann::json e = nlohmann::json::parse(x.output);
+  for (const char* key : {"priority", "triangles", "vertices", "extract_seconds"})
+    EXPECT_TRUE(e.contains(key)) << key << " missing from " << x.output;
+  EXPECT_EQ(e.at("priority").get<std::size_t>(), lods[0].at("priority").get<std::size_t>());
+  EXPECT_EQ(e.at("triangles").get<std::size_t>(), full);
+  EXPECT_EQ(e.at("vertices").get<std::size_t>(), lods[0].at("vertices").get<std::size_t>());
+  EXPECT_GE(e.at("extract_seconds").get<double>(), 0.0);
+  EXPECT_LT(e.at("extract_seconds").get<double>(), 1.0);
+  const scan2lod::TriangleMesh mesh = scan2lod::read_mesh(out.string());
+  EXPECT_EQ(mesh.triangles.size(), full);
+  EXPECT_EQ(mesh.positions.size(), e.at("vertices").get<std::size_t>());
+
+  // --triangles takes the finest level within the budget; --priority is exact.
+  const std::size_t budget = fifth;
+  const CliRun t = run("extract " + model.string() + " --triangles " + std::to_string(budget) + " -o " +
+                           (scratch() / "budget.obj").string() + " --json",
+                       false);
+  ASSERT_EQ(t.status, 0) << t.output;
+  const nlohmann::json tj = nlohmann::json::parse(t.output);
+  EXPECT_LE(tj.at("triangles").get<std::size_t>(), budget);
+  EXPECT_GE(tj.at("priority").get<std::size_t>(), lods[4].at("priority").get<std::size_t>());
+  const CliRun p = run("extract " + model.string() + " --priority 0 -o " + (scratch() / "root.off").string() + " --json",
+                       false);
+  ASSERT_EQ(p.status, 0) << p.output;
+  EXPECT_EQ(nlohmann::json::parse(p.output).at("priority").get<std::size_t>(), 0u);
+  EXPECT_LT(nlohmann::json::parse(p.output).at("triangles").get<std::size_t>(), 20u);
+
+  // Without --json: a one-line summary and a table.
+  const CliRun plain = run("extract " + model.string() + " --percent 20 -o " + (scratch() / "p20.ply").string());
+  ASSERT_EQ(plain.status, 0) << plain.output;
+  EXPECT_NE(plain.output.find(std::to_string(fifth) + " triangles"), std::string::npos) << plain.output;
+  const CliRun table = run("info " + model.string());
+  ASSERT_EQ(table.status, 0) << table.output;
+  EXPECT_NE(table.output.find("LOD %"), std::string::npos) << table.output;
+  EXPECT_NE(table.output.find(std::to_string(full)), std::string::npos) << table.output;
+}
+
+TEST(LodCli, BadInputsFailCleanlyAndWriteNothing) {
+  const fs::path& model = bunny_model();
+  ASSERT_TRUE(fs::exists(model));
+  const fs::path dir = scratch() / "bad";
+  fs::create_directories(dir);
+  std::vector<char> bytes(fs::file_size(model));
+  std::ifstream(model, std::ios::binary).read(bytes.data(), std::streamsize(bytes.size()));
+  std::vector<char> damaged = bytes;
+  damaged[damaged.size() / 2] ^= 0x04;
+  std::ofstream(dir / "damaged.mco", std::ios::binary).write(damaged.data(), std::streamsize(damaged.size()));
+  std::ofstream(dir / "cut.mco", std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() / 3));
+  std::ofstream(dir / "mesh.ply") << "ply\nformat ascii 1.0\nelement vertex 0\nend_header\n";
+  const std::size_t files = files_in(dir);
+  const std::string out = (dir / "out.ply").string();
+  const std::string m = model.string();
+  struct Case {
+    std::string args, expect;
+  };
+  const std::vector<Case> cases = {
+      {"extract " + (dir / "absent.mco").string() + " --percent 50 -o " + out, "absent.mco: cannot read the model"},
+      {"extract " + (dir / "damaged.mco").string() + " --percent 50 -o " + out, "checksum mismatch in section"},
+      {"extract " + (dir / "cut.mco").string() + " --percent 50 -o " + out, "truncated in section"},
+      {"extract " + (dir / "mesh.ply").string() + " --percent 50 -o " + out, "not a scan2lod model"},
+      {"extract " + m + " --percent 10 --triangles 100 -o " + out, "exactly one of --percent, --triangles and --priority, got 2"},
+      {"extract " + m + " -o " + out, "exactly one of --percent, --triangles and --priority, got 0"},
+      {"extract " + m + " --percent 150 -o " + out, "--percent must be between 0 and 100, got 150"},
+      {"extract " + m + " --percent=-1 -o " + out, "--percent must be between 0 and 100"},
+      {"extract " + m + " --triangles=-5 -o " + out, "--triangles must not be negative"},
+      {"extract " + m + " --priority 99999999 -o " + out, "--priority 99999999 is past the model's"},
+      {"extract " + m + " --percent 50 -o " + (dir / "out.xyz").string(), ".xyz"},
+      {"extract " + m + " --percent 50 -o " + (dir / "nowhere" / "out.ply").string(), "does not exist"},
+      {"info " + (dir / "damaged.mco").string(), "damaged.mco: checksum mismatch"},
+      {"info " + (dir / "absent.mco").string(), "absent.mco: cannot read the model"},
+      {"build " + kScans + " -o " + (dir / "model.ply").string() + " -r 16", "extension .mco"},
+      {"build " + kScans + " -o " + (dir / "nowhere" / "model.mco").string() + " -r 16", "does not exist"},
+      {"build " + kScans + " -o " + (dir / "model.mco").string() + " -r 100", "power of two"},
+      {"build " + (dir / "absent.conf").string() + " -o " + (dir / "model.mco").string(), "absent.conf"},
+  };
+  for (const Case& c : cases) {
+    const CliRun r = run(c.args + " -q");
+    EXPECT_NE(r.status, 0) << c.args;
+    EXPECT_NE(r.output.find("scan2lod: error: "), std::string::npos) << c.args << ": " << r.output;
+    EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << ": " << r.output;
+    EXPECT_EQ(r.output.find("Segmentation"), std::string::npos) << r.output;
+    EXPECT_EQ(files_in(dir), files) << "a file was left behind by " << c.args;
+  }
+}
