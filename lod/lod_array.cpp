@@ -106,16 +106,37 @@ LodArray number_nodes(const McOctree& tree) {
   return lod;
 }
 
+std::vector<std::size_t> monotone_priorities(const LodArray& lod) {
+  // Records of the running maximum, ending at full detail.
+  std::vector<std::size_t> levels;
+  std::int64_t best = -1;
+  for (std::size_t i = 0; i < lod.accumulated.size(); ++i)
+    if (lod.accumulated[i] >= best) best = lod.accumulated[i], levels.push_back(i);
+  const std::int64_t full = lod.accumulated.back();
+  while (!levels.empty() && lod.accumulated[levels.back()] > full) levels.pop_back();
+  if (levels.empty() || levels.back() != lod.full()) levels.push_back(lod.full());
+  if (levels.front() != 0 && lod.accumulated[0] <= lod.accumulated[levels.front()]) levels.insert(levels.begin(), 0);
+  return levels;
+}
+
+namespace {
+// The largest offered level at or below `priority`.
+std::size_t snap(const std::vector<std::size_t>& levels, std::size_t priority) {
+  auto it = std::upper_bound(levels.begin(), levels.end(), priority);
+  return it == levels.begin() ? levels.front() : *(it - 1);
+}
+}  // namespace
+
 std::size_t priority_for_percent(const LodArray& lod, double percent) {
   percent = std::clamp(percent, 0.0, 100.0);
-  return std::size_t(std::llround(percent / 100.0 * double(lod.full())));
+  return snap(monotone_priorities(lod), std::size_t(std::llround(percent / 100.0 * double(lod.full()))));
 }
 
 std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles) {
-  // The accumulated counts need not be monotone; take the last prefix that fits.
+  // Offered levels grow in triangles: the last one that fits.
   std::size_t best = 0;
-  for (std::size_t i = 0; i < lod.accumulated.size(); ++i)
-    if (lod.accumulated[i] <= triangles) best = i;
+  for (std::size_t level : monotone_priorities(lod))
+    if (lod.accumulated[level] <= triangles) best = level;
   return best;
 }
 

@@ -24,12 +24,19 @@ struct LodArray {
 // Numbers the nodes of `tree` with a priority queue: O(n log n) for n nodes.
 LodArray number_nodes(const McOctree& tree);
 
-// The priority number (count of expansions) for the first `percent` of the LOD
-// array, as in the seed's tables; percent is clamped to [0, 100].
+// The priority numbers at which levels are offered: those whose triangle count
+// is at least every earlier one's, from 0 to full detail. A single expansion
+// can lower the count (a node's children may need fewer triangles than it, and
+// its coarser neighbours' transitions change), so offered levels skip those
+// dips and the count never decreases from one offered level to the next.
+std::vector<std::size_t> monotone_priorities(const LodArray& lod);
+
+// The offered priority number (count of expansions) at or below the first
+// `percent` of the LOD array, as in the seed's tables; percent clamped to [0, 100].
 std::size_t priority_for_percent(const LodArray& lod, double percent);
 
-// The largest priority number whose mesh has at most `triangles` triangles,
-// through the accumulation table (at least 0).
+// The largest offered priority number whose mesh has at most `triangles`
+// triangles, through the accumulation table (at least 0).
 std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles);
 
 }  // namespace scan2lod

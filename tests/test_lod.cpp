@@ -141,6 +141,30 @@ TEST(LodArray, NeighboursDifferByAtMostOneLevelInEveryPrefix) {
   }
 }
 
+TEST(LodArray, OfferedLevelsNeverLoseTriangles) {
+  const Model& m = bunny64();
+  const std::vector<std::size_t> levels = monotone_priorities(m.lod);
+  ASSERT_GE(levels.size(), 2u);
+  EXPECT_EQ(levels.front(), 0u);
+  EXPECT_EQ(levels.back(), m.lod.full());
+  for (std::size_t i = 1; i < levels.size(); ++i) {
+    ASSERT_GT(levels[i], levels[i - 1]);
+    ASSERT_GE(m.lod.accumulated[levels[i]], m.lod.accumulated[levels[i - 1]]);
+  }
+  // Dense enough to be continuous: most priority numbers are offered.
+  EXPECT_GT(double(levels.size()), 0.5 * double(m.lod.full()));
+  for (double percent = 0; percent <= 100; percent += 0.5) {
+    const std::size_t p = priority_for_percent(m.lod, percent);
+    EXPECT_TRUE(std::binary_search(levels.begin(), levels.end(), p));
+  }
+  std::int64_t previous = -1;
+  for (double percent = 0; percent <= 100; percent += 1) {
+    const std::int64_t count = m.lod.accumulated[priority_for_percent(m.lod, percent)];
+    ASSERT_GE(count, previous) << percent << "%";
+    previous = count;
+  }
+}
+
 TEST(LodArray, AccumulationTableCountsTheExtractedTriangles) {
   const Model& m = bunny64();
   std::vector<std::uint8_t> scratch;
