@@ -98,3 +98,17 @@ TEST(Bunny, LeafCubeNodesDescribeTheMesh) {
   EXPECT_GE(edges, r.mesh.positions.size());
   EXPECT_LE(edges, 4 * r.mesh.positions.size());
 }
+
+TEST(Bunny, CompareGivesTheSameMeanForTwoSampleSeeds) {
+  if (!std::filesystem::exists(kReference)) GTEST_SKIP() << "needs ../shared";
+  const TriangleMesh reference = read_mesh(kReference);
+  CompareOptions a, b;
+  a.seed = 1;
+  b.seed = 2;
+  a.samples = b.samples = 300000;
+  const SurfaceComparison ca = compare_surfaces(bunny_run().r.mesh, reference, a);
+  const SurfaceComparison cb = compare_surfaces(bunny_run().r.mesh, reference, b);
+  EXPECT_NEAR(ca.a_to_b.mean, cb.a_to_b.mean, 0.05 * ca.a_to_b.mean);
+  EXPECT_NEAR(ca.b_to_a.mean, cb.b_to_a.mean, 0.05 * ca.b_to_a.mean);
+  EXPECT_NE(ca.a_to_b.mean, cb.a_to_b.mean);  // different samples were drawn
+}
