@@ -9,6 +9,8 @@
 #include "io/mesh_file.h"
 #include "measure/surface_distance.h"
 
+#include "test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -24,7 +26,7 @@ const std::string kData = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny";
 const std::string kShared = std::string(SCAN2LOD_SHARED_DIR) + "/data/bunny";
 
 fs::path scratch(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("scan2lod_acq_" + std::to_string(::getpid()));
+  const fs::path dir = scan2lod::testing::scratch_folder() / "acquisition";
   fs::create_directories(dir);
   return dir / name;
 }

@@ -1,5 +1,7 @@
 // The command line: bad input gets a clear error, a non-zero exit and no
 // output file; good input gets a one-line summary and the file.
+#include "test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -12,25 +14,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-  int status;
-  std::string output;  // stdout and stderr
-};
+using scan2lod::testing::CliRun;
 
-CliRun run(const std::string& args) {
-  const std::string command = std::string(SCAN2LOD_CLI) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  CliRun r{-1, ""};
-  if (!pipe) return r;
-  std::array<char, 4096> buffer;
-  std::size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
-  r.status = pclose(pipe);
-  return r;
-}
+CliRun run(const std::string& args) { return scan2lod::testing::run_cli(args); }
 
 fs::path scratch() {
-  fs::path dir = fs::temp_directory_path() / ("scan2lod_cli_" + std::to_string(::getpid()));
+  const fs::path dir = scan2lod::testing::scratch_folder() / "cli";
   fs::create_directories(dir);
   return dir;
 }

@@ -3,6 +3,8 @@
 // sizes info promised, and bad input ends in a clear error and no file.
 #include "io/mesh_file.h"
 
+#include "test_support.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -16,35 +18,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-  int status;
-  std::string output;  // stdout and stderr
-};
+using scan2lod::testing::CliRun;
 
 CliRun run(const std::string& args, bool merge_stderr = true) {
-  const std::string command = std::string(SCAN2LOD_CLI) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
-  FILE* pipe = popen(command.c_str(), "r");
-  CliRun r{-1, ""};
-  if (!pipe) return r;
-  std::array<char, 4096> buffer;
-  std::size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
-  r.status = pclose(pipe);
-  return r;
+  return scan2lod::testing::run_cli(args, merge_stderr);
 }
 
-// A folder for this process's files, removed when the tests exit.
 fs::path scratch() {
-  struct Folder {
-    fs::path path = fs::temp_directory_path() / ("scan2lod_lod_cli_" + std::to_string(::getpid()));
-    ~Folder() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Folder folder;
-  fs::create_directories(folder.path);
-  return folder.path;
+  const fs::path dir = scan2lod::testing::scratch_folder() / "lod_cli";
+  fs::create_directories(dir);
+  return dir;
 }
 
 const std::string kScans = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf";

@@ -10,6 +10,8 @@
 #include "reconstruct/cube_table.h"
 #include "reconstruct/marching_cubes.h"
 
+#include "test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -43,18 +45,10 @@ const std::vector<std::uint8_t>& bunny64_bytes() {
   return bytes;
 }
 
-// A folder for this process's files, removed when the tests exit.
 fs::path scratch() {
-  struct Folder {
-    fs::path path = fs::temp_directory_path() / ("scan2lod_model_" + std::to_string(::getpid()));
-    ~Folder() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Folder folder;
-  fs::create_directories(folder.path);
-  return folder.path;
+  const fs::path dir = scan2lod::testing::scratch_folder() / "model_file";
+  fs::create_directories(dir);
+  return dir;
 }
 
 // The message of the InputError that decoding the first `size` bytes throws,

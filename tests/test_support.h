@@ -1,0 +1,48 @@
+// What several test files share: running the real scan2lod binary, and a
+// scratch folder per test process that is removed when the process exits.
+#pragma once
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <system_error>
+
+#include <unistd.h>
+
+namespace scan2lod::testing {
+
+struct CliRun {
+  int status;          // as returned by pclose; 0 on success
+  std::string output;  // stdout, and stderr unless it was dropped
+};
+
+// Runs `scan2lod ARGS` through the shell.
+inline CliRun run_cli(const std::string& args, bool merge_stderr = true) {
+  const std::string command = std::string(SCAN2LOD_CLI) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
+  CliRun r{-1, ""};
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buffer;
+  std::size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
+  r.status = pclose(pipe);
+  return r;
+}
+
+// This process's scratch folder (created on first use, removed at exit).
+inline std::filesystem::path scratch_folder() {
+  struct Folder {
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("scan2lod_test_" + std::to_string(::getpid()));
+    ~Folder() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  };
+  static const Folder folder;
+  std::filesystem::create_directories(folder.path);
+  return folder.path;
+}
+
+}  // namespace scan2lod::testing
