@@ -3,6 +3,8 @@
 #include "core/error.h"
 #include "io/mesh_file.h"
 
+#include "test_support.h"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -22,8 +24,7 @@ namespace fs = std::filesystem;
 
 // A fresh, empty folder per test.
 fs::path scratch(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() /
-                 ("scan2lod_mesh_io_" + std::to_string(::getpid()) + "_" + name);
+  const fs::path dir = scan2lod::testing::scratch_folder() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -6,6 +6,8 @@
 #include "core/error.h"
 #include "io/mesh_file.h"
 
+#include "test_support.h"
+
 #include <gtest/gtest.h>
 #include <open3d/geometry/TriangleMesh.h>
 #include <unistd.h>
@@ -45,8 +47,7 @@ Vec3f to_world(const VirtualScan& s, const Vec3f& p) {
 }
 
 fs::path scratch(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() /
-                 ("scan2lod_vscan_" + std::to_string(::getpid()) + "_" + name);
+  const fs::path dir = scan2lod::testing::scratch_folder() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
