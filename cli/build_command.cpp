@@ -6,7 +6,6 @@
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
 #include "lod/model_file.h"
-#include "reconstruct/signed_distance.h"
 
 #include <chrono>
 #include <cstdio>
@@ -47,12 +46,7 @@ void add_build_command(CLI::App& app) {
 
     stage = clock::now();
     LodModel model;
-    {
-      PointIndex index(points);
-      const SignedDistanceField field =
-          unlimited_distance_field(points, index, options.distance, float(r.leaves.grid.cube_size));
-      model.tree = build_mc_octree(r.leaves, r.mesh, field);
-    }
+    model.tree = build_mc_octree(r);
     model.lod = number_nodes(model.tree);
     const double octree_seconds = since(stage);
 

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/flat_hash.h"
 #include "reconstruct/cube_table.h"
+#include "reconstruct/mesh_field.h"
 
 #include <algorithm>
 #include <cmath>
@@ -441,6 +442,10 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     }
   }
   return tree;
+}
+
+McOctree build_mc_octree(const Reconstruction& reconstruction) {
+  return build_mc_octree(reconstruction.leaves, reconstruction.mesh, mesh_distance_field(reconstruction.mesh));
 }
 
 }  // namespace scan2lod

@@ -79,4 +79,11 @@ struct McOctree {
 // Throws InputError when there are no leaves.
 McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field);
 
+// The octree of a reconstruction, the field being the signed distance to its
+// finished mesh (reconstruct/mesh_field.h): coarse levels then approximate the
+// mesh as delivered, without the pieces and holes that clean-up removed at the
+// leaves. (The scan points' own field re-grows them at coarse corners: the
+// bunny's coarse levels had 18-48 boundary loops with it, 3-13 with this.)
+McOctree build_mc_octree(const Reconstruction& reconstruction);
+
 }  // namespace scan2lod

@@ -31,10 +31,7 @@ Model build_model(OrientedPoints points, int resolution) {
   ReconstructOptions options;
   options.resolution = resolution;
   m.reconstruction = reconstruct(m.points, options);
-  PointIndex index(m.points);
-  const auto field = unlimited_distance_field(m.points, index, options.distance,
-                                              float(m.reconstruction.leaves.grid.cube_size));
-  m.tree = build_mc_octree(m.reconstruction.leaves, m.reconstruction.mesh, field);
+  m.tree = build_mc_octree(m.reconstruction);
   m.lod = number_nodes(m.tree);
   return m;
 }
@@ -214,4 +211,16 @@ TEST(CrackPatching, ScannedSphereIsClosedAtEveryLevel) {
 TEST(CrackPatching, ScannedTorusIsClosedAtEveryLevel) {
   const Model m = build_model(scanned(*open3d::geometry::TriangleMesh::CreateTorus(1.0, 0.4, 200, 80)), 64);
   expect_closed_at_every_level(m, 0);
+}
+
+TEST(CrackPatching, BunnyHasNoNonManifoldEdgeAtAnyLevel) {
+  const Model& m = bunny64();
+  std::vector<std::uint8_t> scratch;
+  std::vector<Triangle> tris;
+  for (double percent : {1.0, 5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0}) {
+    extract_lod(m.tree, m.lod, priority_for_percent(m.lod, percent), &scratch, &tris);
+    const MeshTopology t = mesh_topology(compact_lod(m.tree, tris));
+    EXPECT_EQ(t.non_manifold_edges, 0u) << percent << "%";
+    EXPECT_EQ(t.degenerate_triangles, 0u) << percent << "%";
+  }
 }

@@ -30,10 +30,8 @@ const LodModel& bunny64() {
     ReconstructOptions options;
     options.resolution = 64;
     const Reconstruction r = reconstruct(points, options);
-    PointIndex index(points);
-    const auto field = unlimited_distance_field(points, index, options.distance, float(r.leaves.grid.cube_size));
     LodModel m;
-    m.tree = build_mc_octree(r.leaves, r.mesh, field);
+    m.tree = build_mc_octree(r);
     m.lod = number_nodes(m.tree);
     return m;
   }();
