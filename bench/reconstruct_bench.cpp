@@ -1,16 +1,19 @@
-// Reconstruction benchmark: scan2lod's sparse marching cubes against PCL's
-// MarchingCubesHoppe on the same oriented points, on the Stanford bunny scans.
+// Reconstruction benchmark: scan2lod's sparse marching cubes against the
+// reconstructions a user would otherwise reach for, all on the same oriented
+// points (positions and normals; the Stanford bunny scans by default):
+//   - PCL MarchingCubesHoppe on scan2lod's own cube grid, R = 64, 128 (256
+//     with --pcl-256): the same algorithm family on a dense grid;
+//   - PCL Poisson and Open3D Poisson (trimmed by density) at depth 8 and 9;
+//   - VTK vtkSurfaceReconstructionFilter + vtkContourFilter at 128 samples per
+//     side (Hoppe's method; it estimates its own normals from the positions);
+// and a scaling table of scan2lod itself at R = 64 ... 512.
 //
 // What is measured, per case, each in its own forked child process:
-//   - seconds: wall time of the work alone, timed inside the child.
-//       scan2lod R:        reconstruct() on oriented points already in memory,
-//                          all threads; median of --runs runs (one child each).
-//       scan2lod job R:    load_oriented_points(--input) + reconstruct(), i.e.
-//                          everything from files to mesh; median of --runs.
-//       PCL R:             MarchingCubesHoppe::reconstruct() (kd-tree build,
-//                          dense R^3 grid, polygonisation; single-threaded) on a
-//                          PointNormal copy of the same points; one run, killed
-//                          after --pcl-timeout seconds if given.
+//   - seconds: wall time of the library's reconstruction call alone, timed in
+//     the child; copying the points into the library's types is outside the
+//     timer. A case whose first run takes under --repeat-under seconds is run
+//     --runs times (one child each) and the median reported; slower ones run
+//     once. Every case is killed after --timeout seconds.
 //   - peak MiB: the child's ru_maxrss from wait4(), i.e. its own high-water
 //     RSS, also for a child killed at the timeout. It includes what every
 //     child inherits from the parent (the loaded points, library pages it
@@ -18,14 +21,15 @@
 //   - fidelity: Metro distances (compare_surfaces) between the output and
 //     --reference, both directions as % of the reference's diagonal, p95 of
 //     output->reference; and the output's triangles, components and boundary
-//     loops (mesh_topology). PCL's triangle soup is welded first.
-//   - ratio: PCL seconds / scan2lod seconds at the same R, both from this run,
-//     because this machine is too noisy for times from different runs to compare.
+//     loops (mesh_topology). PCL's marching-cubes soup is welded first.
+//   - ratio: peer seconds / scan2lod reconstruct() seconds at the comparable
+//     resolution, both from this run, because this machine is too noisy for
+//     times from different runs to compare.
 //
-// PCL is made to use scan2lod's grid: same bounding cube, same cube size,
-// corners at the same positions (see PclHoppeOnGrid). Its far-corner cut
-// (setDistanceIgnore) is scan2lod's undefined-corner rule with one global
-// spacing (see pcl_ignore_distance).
+// Comparable settings: marching cubes at R against scan2lod at R; VTK at n
+// samples per side against R = n; Poisson at depth d against R = 2^d, whose
+// finest cells are 1.1 * extent / 2^d against scan2lod's extent / (R - 8),
+// within 7% of each other.
 //
 // Children get the work by fork() without exec, so the parent must never run
 // OpenMP itself before the last child is done: libgomp's thread pool does not
@@ -45,8 +49,19 @@
 #include "reconstruct/marching_cubes.h"
 
 #include <CLI/CLI.hpp>
+#include <open3d/geometry/PointCloud.h>
+#include <open3d/geometry/TriangleMesh.h>
+#include <open3d/utility/Logging.h>
 #include <pcl/point_types.h>
 #include <pcl/surface/marching_cubes_hoppe.h>
+#include <pcl/surface/poisson.h>
+#include <vtkCellArray.h>
+#include <vtkContourFilter.h>
+#include <vtkIdList.h>
+#include <vtkNew.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkSurfaceReconstructionFilter.h>
 
 #include <signal.h>
 #include <sys/resource.h>
@@ -60,6 +75,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
@@ -70,6 +86,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <type_traits>
 #include <unordered_map>
 #include <vector>
@@ -126,19 +143,24 @@ OrientedPoints undump_points(const std::string& path) {
   return p;
 }
 
-// Positions and triangles only: normals and colours do not enter any measure.
-void dump_mesh(const std::string& path, const TriangleMesh& m) {
+// A case's output: positions and triangles (normals and colours do not enter
+// any measure) and scan2lod's counters (left default by the peers).
+static_assert(std::is_trivially_copyable_v<ReconstructStats>);
+
+void dump_case(const std::string& path, const TriangleMesh& m, const ReconstructStats& stats) {
   std::ofstream out(path, std::ios::binary);
   write_array(out, m.positions);
   write_array(out, m.triangles);
+  out.write(reinterpret_cast<const char*>(&stats), sizeof stats);
   if (!out) throw InputError(path, "could not write the mesh dump");
 }
 
-TriangleMesh undump_mesh(const std::string& path) {
+TriangleMesh undump_case(const std::string& path, ReconstructStats* stats) {
   std::ifstream in(path, std::ios::binary);
   TriangleMesh m;
   read_array(in, &m.positions);
   read_array(in, &m.triangles);
+  in.read(reinterpret_cast<char*>(stats), sizeof *stats);
   if (!in) throw InputError(path, "truncated mesh dump");
   return m;
 }
@@ -222,7 +244,35 @@ Outcome run_in_child(const std::function<double()>& work, double timeout) {
 }
 
 // ---------------------------------------------------------------------------
-// The PCL peer.
+// The peers. Each takes the same oriented points, copies them into its
+// library's types (untimed), and sets *seconds to its reconstruction alone.
+
+pcl::PointCloud<pcl::PointNormal>::Ptr to_pcl(const OrientedPoints& points) {
+  pcl::PointCloud<pcl::PointNormal>::Ptr cloud(new pcl::PointCloud<pcl::PointNormal>);
+  cloud->resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    (*cloud)[i].getVector3fMap() = points.positions[i];
+    (*cloud)[i].getNormalVector3fMap() = points.normals[i];
+  }
+  return cloud;
+}
+
+// PCL's triangulated output as an indexed mesh; throws on a non-triangle.
+TriangleMesh from_pcl(const pcl::PointCloud<pcl::PointNormal>& vertices,
+                      const std::vector<pcl::Vertices>& polygons) {
+  TriangleMesh mesh;
+  mesh.positions.reserve(vertices.size());
+  for (const auto& v : vertices) mesh.positions.push_back(v.getVector3fMap());
+  mesh.triangles.reserve(polygons.size());
+  for (const auto& poly : polygons) {
+    if (poly.vertices.size() != 3)
+      throw std::runtime_error("PCL returned a polygon with " +
+                               std::to_string(poly.vertices.size()) + " corners, not a triangle");
+    mesh.triangles.push_back({std::int32_t(poly.vertices[0]), std::int32_t(poly.vertices[1]),
+                              std::int32_t(poly.vertices[2])});
+  }
+  return mesh;
+}
 
 // PCL's MarchingCubesHoppe on scan2lod's cube grid. PCL spans its grid over the
 // points' own box: a different cube size per axis, the surface clipped at the
@@ -272,16 +322,11 @@ float pcl_ignore_distance(const OrientedPoints& points, double cube_size,
   return float(limit * limit);
 }
 
-TriangleMesh run_pcl(const OrientedPoints& points, const CubeGrid& grid, float ignore_squared,
-                     double* seconds) {
-  pcl::PointCloud<pcl::PointNormal>::Ptr cloud(new pcl::PointCloud<pcl::PointNormal>);
-  cloud->resize(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    (*cloud)[i].getVector3fMap() = points.positions[i];
-    (*cloud)[i].getNormalVector3fMap() = points.normals[i];
-  }
+// Single-threaded (PCL's marching cubes has no threads). Returns a triangle soup.
+TriangleMesh run_pcl_hoppe(const OrientedPoints& points, const CubeGrid& grid,
+                           float ignore_squared, double* seconds) {
   PclHoppeOnGrid mc(grid);
-  mc.setInputCloud(cloud);
+  mc.setInputCloud(to_pcl(points));
   mc.setGridResolution(grid.resolution, grid.resolution, grid.resolution);
   mc.setIsoLevel(0.0f);
   mc.setPercentageExtendGrid(0.0f);  // overridden by PclHoppeOnGrid anyway
@@ -292,15 +337,113 @@ TriangleMesh run_pcl(const OrientedPoints& points, const CubeGrid& grid, float i
   const auto start = std::chrono::steady_clock::now();
   mc.reconstruct(vertices, polygons);
   *seconds = seconds_since(start);
+  return from_pcl(vertices, polygons);
+}
 
-  TriangleMesh soup;
-  soup.positions.reserve(vertices.size());
-  for (const auto& v : vertices) soup.positions.push_back(v.getVector3fMap());
-  soup.triangles.reserve(polygons.size());
-  for (const auto& poly : polygons)
-    soup.triangles.push_back({std::int32_t(poly.vertices[0]), std::int32_t(poly.vertices[1]),
-                              std::int32_t(poly.vertices[2])});
-  return soup;
+// PCL's Poisson (Kazhdan's PoissonRecon 4, bundled in PCL) with its defaults
+// apart from depth, on all cores. It has no density output to trim by, so the
+// surface is closed across every hole in the data.
+TriangleMesh run_pcl_poisson(const OrientedPoints& points, int depth, double* seconds) {
+  pcl::Poisson<pcl::PointNormal> poisson;
+  poisson.setInputCloud(to_pcl(points));
+  poisson.setDepth(depth);
+  poisson.setThreads(0);  // 0: all cores
+
+  pcl::PointCloud<pcl::PointNormal> vertices;
+  std::vector<pcl::Vertices> polygons;
+  const auto start = std::chrono::steady_clock::now();
+  poisson.reconstruct(vertices, polygons);
+  *seconds = seconds_since(start);
+  return from_pcl(vertices, polygons);
+}
+
+// Open3D's CreateFromPointCloudPoisson (PoissonRecon 12) with its defaults
+// apart from depth, on all cores, then the usual trimming: vertices whose
+// density (samples supporting them) is below the `trim` quantile are removed
+// with their triangles, which cuts away most surface invented across holes.
+// The trimming is inside the timer: it is part of the recipe.
+TriangleMesh run_open3d_poisson(const OrientedPoints& points, int depth, double trim,
+                                double* seconds) {
+  open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
+  open3d::geometry::PointCloud cloud;
+  cloud.points_.reserve(points.size());
+  cloud.normals_.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    cloud.points_.push_back(points.positions[i].cast<double>());
+    cloud.normals_.push_back(points.normals[i].cast<double>());
+  }
+
+  const auto start = std::chrono::steady_clock::now();
+  auto [mesh, density] = open3d::geometry::TriangleMesh::CreateFromPointCloudPoisson(
+      cloud, std::size_t(depth));
+  if (trim > 0 && !density.empty()) {
+    std::vector<double> sorted = density;
+    const auto q = sorted.begin() + std::ptrdiff_t(trim * double(sorted.size() - 1));
+    std::nth_element(sorted.begin(), q, sorted.end());
+    std::vector<bool> low(density.size());
+    for (std::size_t i = 0; i < density.size(); ++i) low[i] = density[i] < *q;
+    mesh->RemoveVerticesByMask(low);
+  }
+  *seconds = seconds_since(start);
+
+  TriangleMesh out;
+  out.positions.reserve(mesh->vertices_.size());
+  for (const Eigen::Vector3d& v : mesh->vertices_) out.positions.push_back(v.cast<float>());
+  out.triangles.reserve(mesh->triangles_.size());
+  for (const Eigen::Vector3i& t : mesh->triangles_) out.triangles.push_back({t[0], t[1], t[2]});
+  return out;
+}
+
+// The spacing that gives VTK's grid `samples` samples along the points' longest
+// axis: vtkSurfaceReconstructionFilter pads the box by 2 spacings on each side
+// and takes floor(padded extent / spacing) samples.
+double vtk_sample_spacing(const Aabb& box, int samples) {
+  return double(box.extent().maxCoeff()) / (samples - 4 + 0.5);
+}
+
+// VTK's vtkSurfaceReconstructionFilter (Hoppe et al. 1992: tangent planes by
+// PCA of 20 neighbours, oriented by propagating along a minimum spanning tree;
+// the signed distance to the nearest point's plane on a dense grid) and
+// vtkContourFilter at 0, single-threaded. It takes positions only: the
+// points' normals are not used.
+TriangleMesh run_vtk(const OrientedPoints& points, double spacing, double* seconds) {
+  vtkNew<vtkPoints> positions;
+  positions->SetDataTypeToFloat();
+  positions->SetNumberOfPoints(vtkIdType(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    positions->SetPoint(vtkIdType(i), points.positions[i].data());
+  vtkNew<vtkPolyData> input;
+  input->SetPoints(positions);
+
+  vtkNew<vtkSurfaceReconstructionFilter> distance;
+  distance->SetInputData(input);
+  distance->SetSampleSpacing(spacing);
+  vtkNew<vtkContourFilter> contour;
+  contour->SetInputConnection(distance->GetOutputPort());
+  contour->SetValue(0, 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  contour->Update();
+  *seconds = seconds_since(start);
+
+  vtkPolyData* surface = contour->GetOutput();
+  TriangleMesh out;
+  out.positions.resize(std::size_t(surface->GetNumberOfPoints()));
+  for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i) {
+    double p[3];
+    surface->GetPoint(i, p);
+    out.positions[std::size_t(i)] = Vec3d(p[0], p[1], p[2]).cast<float>();
+  }
+  vtkCellArray* polys = surface->GetPolys();
+  out.triangles.reserve(std::size_t(polys->GetNumberOfCells()));
+  vtkNew<vtkIdList> cell;
+  for (polys->InitTraversal(); polys->GetNextCell(cell);) {
+    if (cell->GetNumberOfIds() != 3)
+      throw std::runtime_error("vtkContourFilter returned a polygon with " +
+                               std::to_string(cell->GetNumberOfIds()) + " corners");
+    out.triangles.push_back({std::int32_t(cell->GetId(0)), std::int32_t(cell->GetId(1)),
+                             std::int32_t(cell->GetId(2))});
+  }
+  return out;
 }
 
 // ---------------------------------------------------------------------------
@@ -393,26 +536,42 @@ float weld_tolerance(const TriangleMesh& soup) {
 }
 
 // ---------------------------------------------------------------------------
-// The report.
+// Cases.
 
-struct Row {
-  std::string method;
-  int resolution = 0;
-  std::vector<Outcome> runs;     // empty: skipped
-  std::string skipped;           // shown instead of a time when skipped
-  std::string mesh_path;         // dump of the first run's output
-  bool soup = false;             // PCL: weld before measuring
-  const Row* peer = nullptr;     // the PCL row the ratio is taken against
-  double cube_size = 0;
-  float ignore_squared = 0;      // PCL's setDistanceIgnore
+// A case's work, run in a child: returns the mesh and sets *seconds to the time
+// of the reconstruction alone; scan2lod's cases also fill *stats.
+using CaseWork = std::function<TriangleMesh(double* seconds, ReconstructStats* stats)>;
+
+// Method names, as the table shows them.
+const std::string kOurs = "scan2lod reconstruct()";
+const std::string kJob = "scan2lod job (files → mesh)";
+const std::string kPclHoppe = "PCL MarchingCubesHoppe";
+const std::string kPclPoisson = "PCL Poisson";
+const std::string kOpen3dPoisson = "Open3D Poisson";
+const std::string kVtk = "VTK SurfaceReconstruction";
+
+struct Case {
+  enum Kind { ours, job, peer };
+  Kind kind = peer;
+  std::string method;           // e.g. "Open3D Poisson"
+  std::string setting;          // e.g. "depth 8"
+  int resolution = 0;           // scan2lod's R; for a peer, the R it is compared with
+  bool soup = false;            // PCL MarchingCubesHoppe: weld before measuring
+  CaseWork work;
+  std::vector<Outcome> runs;    // empty: skipped
+  std::string skipped;          // shown instead of a time when skipped
+  std::string mesh_path;        // dump of the first run's output
+  std::string note;             // parameters worth printing under the table
 
   // measured afterwards in the parent
+  ReconstructStats stats;       // scan2lod's counters (ours and job)
   std::optional<MeshTopology> topology;
   std::optional<SurfaceComparison> fidelity;
   std::optional<MeshTopology> exact_weld;
   float weld_tolerance = 0;
   std::string measure_error;
 
+  std::string name() const { return method + " " + setting; }
   bool all_ok() const {
     if (runs.empty()) return false;
     for (const Outcome& o : runs)
@@ -429,6 +588,11 @@ struct Row {
     for (const Outcome& o : runs) m = std::max(m, o.peak_mib);
     return m;
   }
+  // Mean of the two directions' mean distances, % of the reference diagonal.
+  std::optional<double> two_sided_mean() const {
+    if (!fidelity) return std::nullopt;
+    return 100 * 0.5 * (fidelity->a_to_b.mean + fidelity->b_to_a.mean) / fidelity->diagonal;
+  }
 };
 
 std::string fixed(double v, int digits) {
@@ -437,28 +601,42 @@ std::string fixed(double v, int digits) {
   return buf;
 }
 
-std::string time_cell(const Row& r) {
-  if (r.runs.empty()) return r.skipped;
-  for (const Outcome& o : r.runs)
-    if (o.status != Outcome::ok) return o.message;
-  std::string cell = fixed(r.seconds(), 2);
-  if (r.runs.size() > 1) {  // the spread shows how noisy the machine was
-    double lo = r.runs[0].seconds, hi = lo;
-    for (const Outcome& o : r.runs) lo = std::min(lo, o.seconds), hi = std::max(hi, o.seconds);
-    cell += " (" + fixed(lo, 2) + "–" + fixed(hi, 2) + ", " + std::to_string(r.runs.size()) + " runs)";
+// Runs the case once, and `runs` times in all if the first run took under
+// `repeat_under` seconds; each run in its own child, killed after `timeout`
+// seconds (0: never). The first run's output is dumped for measuring.
+void run_case(Case& c, int runs, double repeat_under, double timeout) {
+  std::fprintf(stderr, "%s\n", c.name().c_str());
+  for (int run = 0; run < runs; ++run) {
+    if (run == 1 && !(c.runs[0].status == Outcome::ok && c.runs[0].seconds < repeat_under)) break;
+    const Outcome o = run_in_child([&] {
+      double seconds = 0;
+      ReconstructStats stats;
+      const TriangleMesh mesh = c.work(&seconds, &stats);
+      if (run == 0) dump_case(c.mesh_path, mesh, stats);
+      return seconds;
+    }, timeout);
+    c.runs.push_back(o);
+    std::fprintf(stderr, "  run %-3d %s, peak %.0f MiB\n", run + 1,
+                 o.status == Outcome::ok ? (fixed(o.seconds, 2) + " s").c_str() : o.message.c_str(),
+                 o.peak_mib);
   }
-  return cell;
 }
 
-std::string ratio_cell(const Row& r) {
-  if (!r.peer) return r.soup ? "peer" : "—";
-  if (!r.all_ok()) return "—";
-  const Row& p = *r.peer;
-  if (p.runs.empty()) return "— (no peer)";
-  if (p.runs[0].status == Outcome::timed_out)  // PCL took at least the timeout
-    return "> " + fixed(p.runs[0].seconds / r.seconds(), 1);
-  if (!p.all_ok()) return "— (peer failed)";
-  return fixed(p.seconds() / r.seconds(), 1);
+// The scan2lod reconstruct() case at resolution R, or nullptr.
+const Case* ours_at(const std::vector<Case>& cases, int resolution) {
+  for (const Case& c : cases)
+    if (c.kind == Case::ours && c.resolution == resolution) return &c;
+  return nullptr;
+}
+
+// peer seconds / scan2lod seconds at the peer's comparable resolution; a lower
+// bound for a peer killed at the timeout. Empty if either has no time.
+std::optional<double> time_ratio(const std::vector<Case>& cases, const Case& peer) {
+  const Case* ours = ours_at(cases, peer.resolution);
+  if (!ours || !ours->all_ok() || peer.runs.empty()) return std::nullopt;
+  if (peer.runs[0].status == Outcome::timed_out) return peer.runs[0].seconds / ours->seconds();
+  if (!peer.all_ok()) return std::nullopt;
+  return peer.seconds() / ours->seconds();
 }
 
 // The source tree's commit, and whether it had uncommitted changes, at run
@@ -498,10 +676,268 @@ std::string cpu_model() {
   return {};
 }
 
-void print_report(const std::vector<Row>& rows, const std::string& command_line,
-                  const std::string& load_at_start,
-                  const std::string& input, const std::string& reference, std::size_t points,
-                  double baseline_mib, bool pcl_256, double pcl_timeout) {
+// ---------------------------------------------------------------------------
+// The report.
+
+// The benchmark's options (see main() for their flags).
+struct Settings {
+  std::string input, reference;
+  std::string only;  // run only the cases whose name contains this
+  bool quick = false, pcl_256 = false, no_slow = false;
+  int runs = 5;  // a short burst of other load then moves the median little
+  double repeat_under = 10;
+  double timeout = 900;
+  double trim = 0.01;
+  std::size_t samples = 1000000;
+};
+
+// Facts about the run the report prints besides the cases.
+struct RunInfo {
+  std::string command_line, load_at_start, load_at_end;
+  std::size_t points = 0;
+  double baseline_mib = 0;
+};
+
+std::string time_cell(const Case& c) {
+  if (c.runs.empty()) return c.skipped;
+  for (const Outcome& o : c.runs)
+    if (o.status != Outcome::ok) return o.message;
+  std::string cell = fixed(c.seconds(), 2);
+  if (c.runs.size() > 1) {  // the spread shows how noisy the machine was
+    double lo = c.runs[0].seconds, hi = lo;
+    for (const Outcome& o : c.runs) lo = std::min(lo, o.seconds), hi = std::max(hi, o.seconds);
+    cell += " (" + fixed(lo, 2) + "–" + fixed(hi, 2) + ", " + std::to_string(c.runs.size()) + " runs)";
+  } else {
+    cell += " (1 run)";
+  }
+  return cell;
+}
+
+std::string ratio_cell(const std::vector<Case>& cases, const Case& c) {
+  if (c.kind != Case::peer) return "—";
+  const std::optional<double> ratio = time_ratio(cases, c);
+  if (!ratio) return "—";
+  const bool lower_bound = c.runs[0].status == Outcome::timed_out;
+  return (lower_bound ? "> " : "") + fixed(*ratio, 1) + " (R=" + std::to_string(c.resolution) + ")";
+}
+
+// "12.3 (×4.1)": a value and its growth from the previous row, if any.
+std::string with_growth(double value, std::optional<double> previous, int digits) {
+  std::string cell = fixed(value, digits);
+  if (previous && *previous > 0) cell += " (×" + fixed(value / *previous, 1) + ")";
+  return cell;
+}
+
+void print_cases_table(const std::vector<Case>& cases) {
+  std::printf("| method | setting | seconds (median) | ratio peer/scan2lod (at R) | peak MiB "
+              "| triangles | mean %% (out→ref / ref→out) | p95 %% out→ref | components "
+              "| boundary loops |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const Case& c : cases) {
+    std::string tris = "—", mean = "—", p95 = "—", comps = "—", loops = "—";
+    if (c.topology) {
+      tris = std::to_string(c.topology->triangles);
+      comps = std::to_string(c.topology->components);
+      loops = std::to_string(c.topology->boundary_loops);
+    }
+    if (c.fidelity) {
+      const double d = c.fidelity->diagonal;
+      mean = fixed(100 * c.fidelity->a_to_b.mean / d, 3) + " / " +
+             fixed(100 * c.fidelity->b_to_a.mean / d, 3);
+      p95 = fixed(100 * c.fidelity->a_to_b.p95 / d, 3);
+    }
+    const std::string method = c.kind == Case::peer ? c.method : "**" + c.method + "**";
+    std::printf("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", method.c_str(),
+                c.setting.c_str(), time_cell(c).c_str(), ratio_cell(cases, c).c_str(),
+                c.runs.empty() ? "—" : fixed(c.peak_mib(), 0).c_str(), tris.c_str(), mean.c_str(),
+                p95.c_str(), comps.c_str(), loops.c_str());
+  }
+}
+
+// scan2lod alone over R: the work should follow the surface's area (×4 per
+// doubling of R), not the grid's volume (×8).
+void print_scaling_table(const std::vector<Case>& cases) {
+  std::vector<const Case*> ours;
+  for (const Case& c : cases)
+    if (c.kind == Case::ours && c.all_ok() && c.topology) ours.push_back(&c);
+  std::sort(ours.begin(), ours.end(),
+            [](const Case* a, const Case* b) { return a->resolution < b->resolution; });
+  if (ours.empty()) {
+    std::printf("No scan2lod case completed.\n");
+    return;
+  }
+  std::printf("| R | seconds (median) | peak MiB | cubes touched | corners evaluated | triangles "
+              "| cubes touched / R³ |\n");
+  std::printf("|---:|---:|---:|---:|---:|---:|---:|\n");
+  // Growth is shown against the row of half the resolution only.
+  const auto half = [&](std::size_t i) -> const Case* {
+    return i > 0 && ours[i - 1]->resolution * 2 == ours[i]->resolution ? ours[i - 1] : nullptr;
+  };
+  const auto previous = [&](std::size_t i, const std::function<double(const Case&)>& f) {
+    const Case* h = half(i);
+    return h ? std::optional<double>(f(*h)) : std::nullopt;
+  };
+  const auto seconds = [](const Case& c) { return c.seconds(); };
+  const auto peak = [](const Case& c) { return c.peak_mib(); };
+  const auto touched = [](const Case& c) { return double(c.stats.cubes_touched); };
+  const auto corners = [](const Case& c) { return double(c.stats.corners_evaluated); };
+  const auto triangles = [](const Case& c) { return double(c.topology->triangles); };
+  for (std::size_t i = 0; i < ours.size(); ++i) {
+    const Case& c = *ours[i];
+    const double cubes = std::pow(double(c.resolution), 3);
+    std::printf("| %d | %s | %s | %s | %s | %s | %s%% |\n", c.resolution,
+                with_growth(seconds(c), previous(i, seconds), 2).c_str(),
+                with_growth(peak(c), previous(i, peak), 0).c_str(),
+                with_growth(touched(c), previous(i, touched), 0).c_str(),
+                with_growth(corners(c), previous(i, corners), 0).c_str(),
+                with_growth(triangles(c), previous(i, triangles), 0).c_str(),
+                fixed(100 * touched(c) / cubes, 3).c_str());
+  }
+  // Geometric mean of the growth per doubling, over all doublings present.
+  const auto mean_growth = [&](const std::function<double(const Case&)>& f) {
+    double log_sum = 0;
+    int n = 0;
+    for (std::size_t i = 0; i < ours.size(); ++i)
+      if (const Case* h = half(i); h && f(*h) > 0) log_sum += std::log(f(*ours[i]) / f(*h)), ++n;
+    return n ? fixed(std::exp(log_sum / n), 2) : std::string("—");
+  };
+  std::printf("\nGrowth per doubling of R (in parentheses above; geometric mean over the doublings "
+              "here): seconds ×%s, peak MiB ×%s, cubes touched ×%s, corners evaluated ×%s, "
+              "triangles ×%s. A dense grid grows ×8 per doubling, a surface ×4.\n",
+              mean_growth(seconds).c_str(), mean_growth(peak).c_str(),
+              mean_growth(touched).c_str(), mean_growth(corners).c_str(),
+              mean_growth(triangles).c_str());
+}
+
+// The best peer for time (lowest ratio to scan2lod at its comparable R) and for
+// fidelity (lowest two-sided mean), each against scan2lod at that R.
+void print_summary(const std::vector<Case>& cases) {
+  const Case* fastest = nullptr;
+  double fastest_ratio = 0;
+  const Case* most_faithful = nullptr;
+  for (const Case& c : cases) {
+    if (c.kind != Case::peer || !c.all_ok()) continue;
+    if (const auto ratio = time_ratio(cases, c); ratio && (!fastest || *ratio < fastest_ratio))
+      fastest = &c, fastest_ratio = *ratio;
+    const std::optional<double> mean = c.two_sided_mean();
+    if (mean && (!most_faithful || *mean < *most_faithful->two_sided_mean())) most_faithful = &c;
+  }
+  if (fastest) {
+    const Case& ours = *ours_at(cases, fastest->resolution);
+    const std::string verdict = fastest_ratio >= 1
+                                    ? "scan2lod is **" + fixed(fastest_ratio, 1) + "× faster**"
+                                    : "the peer is **" + fixed(1 / fastest_ratio, 1) + "× faster**";
+    std::printf("- **Time.** The peer closest to scan2lod in speed, at the comparable setting, is "
+                "%s: %s s, against %s s for scan2lod at R=%d: %s (ratio %s).\n",
+                fastest->name().c_str(), fixed(fastest->seconds(), 2).c_str(),
+                fixed(ours.seconds(), 2).c_str(), ours.resolution, verdict.c_str(),
+                fixed(fastest_ratio, 2).c_str());
+  } else {
+    std::printf("- **Time.** No peer completed with a scan2lod case to compare against.\n");
+  }
+  const Case* ours = most_faithful ? ours_at(cases, most_faithful->resolution) : nullptr;
+  if (most_faithful && ours && ours->two_sided_mean()) {
+    const double peer = *most_faithful->two_sided_mean(), own = *ours->two_sided_mean();
+    std::printf("- **Fidelity** (two-sided mean: the mean of both directions' mean distances, %% "
+                "of the reference's diagonal). The most faithful peer is %s at %s%%; scan2lod at "
+                "R=%d reaches %s%%, so scan2lod's error is **%s× the peer's** (%s). At that "
+                "setting scan2lod takes %s s, the peer %s s.\n",
+                most_faithful->name().c_str(), fixed(peer, 4).c_str(), ours->resolution,
+                fixed(own, 4).c_str(), fixed(own / peer, 2).c_str(),
+                own < peer ? "scan2lod is closer" : own > peer ? "the peer is closer" : "equal",
+                fixed(ours->seconds(), 2).c_str(), fixed(most_faithful->seconds(), 2).c_str());
+  } else {
+    std::printf("- **Fidelity.** No peer was measured against a scan2lod case.\n");
+  }
+}
+
+void print_notes(const std::vector<Case>& cases, const Settings& s, const RunInfo& info) {
+  std::printf("- Every case ran in its own forked process; seconds are wall time of the "
+              "reconstruction call alone, peak MiB is that process's `ru_maxrss`. It includes "
+              "what the child inherits from the parent (the loaded points, the libraries it "
+              "touches): a child that does nothing peaks at %.0f MiB. %s Cases were killed "
+              "after %.0f s.\n",
+              info.baseline_mib,
+              s.runs == 1 ? "Each case ran once."
+                          : ("Cases whose first run took under " + fixed(s.repeat_under, 0) +
+                             " s ran " + std::to_string(s.runs) + " times (median, range in "
+                             "parentheses); slower ones ran once.").c_str(),
+              s.timeout);
+  const char* policy = std::getenv("OMP_WAIT_POLICY");
+  if (policy && std::string(policy) == "passive")
+    std::printf("- OpenMP threads waited passively (`OMP_WAIT_POLICY=passive`, set by "
+                "`bench/run.sh`) for every case, scan2lod's included: with libgomp's default "
+                "spinning, one other busy process on this 2-core machine made Open3D's Poisson "
+                "up to 8× slower.\n");
+  std::printf("- Ratio = peer seconds / scan2lod `reconstruct()` seconds at the comparable R, both "
+              "from this run: marching cubes at R against R, VTK at n samples per side against "
+              "R = n, Poisson at depth d against R = 2^d (finest cells 1.1 · extent / 2^d "
+              "against scan2lod's extent / (R − 8), within 7%%).\n");
+  std::printf("- scan2lod: `reconstruct()` with default `ReconstructOptions` apart from the "
+              "resolution, on all %ld threads; \"job\" adds `load_oriented_points()` on the input "
+              "files. It drops pieces under 1%% of its triangles and closes small holes "
+              "(`min_piece`, `max_hole`); the bunny's open bottom stays open.\n",
+              sysconf(_SC_NPROCESSORS_ONLN));
+  // Each peer's parameters, if it ran.
+  const auto ran = [&](const std::string& method) {
+    return std::any_of(cases.begin(), cases.end(),
+                       [&](const Case& c) { return c.method == method && !c.runs.empty(); });
+  };
+  if (ran(kPclHoppe))
+    std::printf("- PCL MarchingCubesHoppe: `MarchingCubesHoppe<PointNormal>` (single-threaded) on "
+                "scan2lod's cube grid (same bounding cube and corners), iso level 0, distance "
+                "ignore = (`max_distance` · max(cube size, median spacing))², i.e. scan2lod's "
+                "undefined-corner rule with one global spacing. It keeps everything its grid "
+                "produces, which shows in its components, boundary loops and out→ref error.\n");
+  if (ran(kPclPoisson))
+    std::printf("- PCL Poisson: `pcl::Poisson<PointNormal>` (PoissonRecon 4) with PCL's "
+                "defaults apart from the depth (min depth 5, point weight 4, scale 1.1, samples "
+                "per node 1, degree 2, manifold), `setThreads(0)`: all cores. PCL gives no "
+                "densities to trim by, so its surface is watertight: it closes the bunny's open "
+                "bottom and every hole with invented surface, which shows in out→ref.\n");
+  if (ran(kOpen3dPoisson))
+    std::printf("- Open3D Poisson: `TriangleMesh::CreateFromPointCloudPoisson(cloud, depth)` "
+                "(PoissonRecon 12; width 0, scale 1.1, no linear fit, all threads), then the "
+                "vertices whose density is below the %s%% quantile removed with their triangles "
+                "(`RemoveVerticesByMask`), timed together. The default, 1%%, is the quantile "
+                "of Open3D's own tutorial and, on the bunny at depth 8, the best two-sided mean "
+                "of 0, 1, 2, 5 and 10%%: less keeps surface invented across the open bottom "
+                "(out→ref grows), more cuts into the real surface (ref→out grows).\n",
+                fixed(100 * s.trim, 1).c_str());
+  if (ran(kVtk))
+    std::printf("- VTK: `vtkSurfaceReconstructionFilter` (neighbourhood 20) with the sample "
+                "spacing set for n samples along the longest axis, then `vtkContourFilter` at 0; "
+                "single-threaded. It uses the positions only: normals are estimated by VTK (PCA of "
+                "20 neighbours, oriented by propagation along a minimum spanning tree), the input "
+                "normals are not used. Most of its time goes into that orientation (each step "
+                "searches, and each insertion checks, a flat list of candidate points), not "
+                "into the grid. Its signed "
+                "distance is defined on the whole grid, so the contour can also run where there "
+                "is no data.\n");
+  std::printf("- Fidelity: `compare_surfaces` against the reference with %zu samples per "
+              "direction, distances as %% of the reference's diagonal; triangles, components and "
+              "boundary loops from `mesh_topology`. Zero-area triangles (Poisson and VTK outputs "
+              "can have some) carry no samples; `mesh_topology` counts them.\n",
+              s.samples);
+  for (const Case& c : cases) {
+    if (!c.note.empty() && !c.runs.empty())
+      std::printf("- %s: %s.\n", c.name().c_str(), c.note.c_str());
+    if (c.topology && c.topology->degenerate_triangles > 0 && !c.soup)
+      std::printf("- %s: %zu degenerate triangles.\n", c.name().c_str(),
+                  c.topology->degenerate_triangles);
+    if (c.soup && c.topology && c.exact_weld)
+      std::printf("- %s output is a triangle soup, welded before measuring: vertices within "
+                  "%.2g m (4 float ulps of the largest coordinate) merged, %zu triangles "
+                  "collapsed by it. An exact-position weld would leave %zu components and %zu "
+                  "boundary loops: copies of a vertex differ in the last bits.\n",
+                  c.name().c_str(), double(c.weld_tolerance), c.topology->degenerate_triangles,
+                  c.exact_weld->components, c.exact_weld->boundary_loops);
+    if (!c.measure_error.empty())
+      std::printf("- %s: measuring failed: %s\n", c.name().c_str(), c.measure_error.c_str());
+  }
+}
+
+void print_report(const std::vector<Case>& cases, const Settings& s, const RunInfo& info) {
   utsname u{};
   uname(&u);
   char date[64];
@@ -509,79 +945,30 @@ void print_report(const std::vector<Row>& rows, const std::string& command_line,
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
   const std::string cpu = cpu_model();
 
-  std::printf("# Reconstruction benchmark: scan2lod vs PCL MarchingCubesHoppe\n\n");
-  std::printf("%s · %s · nproc %ld%s%s · load average at start %s\n\n", date, u.machine,
-              sysconf(_SC_NPROCESSORS_ONLN), cpu.empty() ? "" : " · ", cpu.c_str(),
-              load_at_start.c_str());
-  std::printf("Command: `%s`  \n", command_line.c_str());
+  std::printf("# Reconstruction benchmark: scan2lod against PCL, Open3D and VTK\n\n");
+  std::printf("%s · %s · nproc %ld%s%s · load average at start %s, after the timed cases %s\n\n",
+              date, u.machine, sysconf(_SC_NPROCESSORS_ONLN), cpu.empty() ? "" : " · ",
+              cpu.c_str(), info.load_at_start.c_str(), info.load_at_end.c_str());
+  std::printf("Command: `%s`  \n", info.command_line.c_str());
+  // bench/run.sh makes it passive: see there why.
+  if (const char* wait_policy = std::getenv("OMP_WAIT_POLICY"))
+    std::printf("OpenMP: `OMP_WAIT_POLICY=%s`  \n", wait_policy);
+  else
+    std::printf("OpenMP: `OMP_WAIT_POLICY` unset (libgomp's default: spin, then sleep)  \n");
   const std::string revision = source_revision();
   if (!revision.empty()) std::printf("Source: %s (at run time)  \n", revision.c_str());
-  std::printf("Input: `%s` (%zu oriented points)  \n", input.c_str(), points);
-  std::printf("Reference: %s\n\n", reference.empty() ? "none (fidelity columns empty)"
-                                                     : ("`" + reference + "`").c_str());
+  std::printf("Input: `%s` (%zu oriented points)  \n", s.input.c_str(), info.points);
+  std::printf("Reference: %s\n\n", s.reference.empty() ? "none (fidelity columns empty)"
+                                                       : ("`" + s.reference + "`").c_str());
 
-  std::printf("| method | R | seconds (median) | ratio vs PCL | peak MiB | triangles "
-              "| mean %% (out→ref / ref→out) | p95 %% out→ref | components | boundary loops |\n");
-  std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  for (const Row& r : rows) {
-    std::string tris = "—", mean = "—", p95 = "—", comps = "—", loops = "—";
-    if (r.topology) {
-      tris = std::to_string(r.topology->triangles);
-      comps = std::to_string(r.topology->components);
-      loops = std::to_string(r.topology->boundary_loops);
-    }
-    if (r.fidelity) {
-      const double d = r.fidelity->diagonal;
-      mean = fixed(100 * r.fidelity->a_to_b.mean / d, 3) + " / " +
-             fixed(100 * r.fidelity->b_to_a.mean / d, 3);
-      p95 = fixed(100 * r.fidelity->a_to_b.p95 / d, 3);
-    }
-    const bool ran = !r.runs.empty();
-    std::printf("| %s | %d | %s | %s | %s | %s | %s | %s | %s | %s |\n", r.method.c_str(),
-                r.resolution, time_cell(r).c_str(), ratio_cell(r).c_str(),
-                ran ? fixed(r.peak_mib(), 0).c_str() : "—", tris.c_str(), mean.c_str(),
-                p95.c_str(), comps.c_str(), loops.c_str());
-  }
-
-  std::printf("\nNotes\n\n");
-  std::printf("- Every case ran in its own forked process; seconds are wall time of the work "
-              "alone, peak MiB is that process's `ru_maxrss`. It includes what the child "
-              "inherits from the parent (the loaded points, the libraries it touches): a child "
-              "that does nothing peaks at %.0f MiB.\n", baseline_mib);
-  std::printf("- scan2lod: `reconstruct()` with default `ReconstructOptions` on all %ld threads; "
-              "\"job\" adds `load_oriented_points()` on the input files. "
-              "PCL: `MarchingCubesHoppe<PointNormal>` (single-threaded), one run, on the same "
-              "positions and normals and on scan2lod's cube grid (same bounding cube and "
-              "corners), iso level 0, distance ignore = (`max_distance` · max(cube size, median "
-              "spacing))², i.e. scan2lod's undefined-corner rule with one global spacing.\n",
-              sysconf(_SC_NPROCESSORS_ONLN));
-  std::printf("- scan2lod also drops pieces under 1%% of its triangles and closes small holes "
-              "(`min_piece`, `max_hole`); PCL keeps everything its grid produces, which shows in "
-              "its components, boundary loops and out→ref error.\n");
-  std::printf("- Ratio = PCL seconds / scan2lod seconds at the same R in this run "
-              "(the job row against PCL's reconstruction alone).\n");
-  if (!pcl_256) std::printf("- PCL at R=256 was skipped (run with `--pcl-256`, about 9 min).\n");
-  if (pcl_timeout > 0) std::printf("- PCL cases were killed after %.0f s.\n", pcl_timeout);
-  std::printf("- Fidelity: `compare_surfaces` against the reference, distances as %% of the "
-              "reference's diagonal; triangles, components and boundary loops from "
-              "`mesh_topology`.\n");
-  for (const Row& r : rows) {
-    if (r.soup && !r.runs.empty())
-      std::printf("- PCL R=%d: cube size %.4g m, distance ignore %.4g m².\n", r.resolution,
-                  r.cube_size, double(r.ignore_squared));
-    if (r.soup && r.topology && r.exact_weld)
-      std::printf("- PCL R=%d output is a triangle soup, welded before measuring: vertices within "
-                  "%.2g m (4 float ulps of the largest coordinate, %.1e cube sizes) merged, "
-                  "%zu triangles collapsed by it. An exact-position weld would leave %zu "
-                  "components and %zu boundary loops: copies of a vertex differ in the last "
-                  "bits.\n",
-                  r.resolution, double(r.weld_tolerance), r.weld_tolerance / r.cube_size,
-                  r.topology->degenerate_triangles, r.exact_weld->components,
-                  r.exact_weld->boundary_loops);
-    if (!r.measure_error.empty())
-      std::printf("- %s R=%d: measuring failed: %s\n", r.method.c_str(), r.resolution,
-                  r.measure_error.c_str());
-  }
+  std::printf("## Every method on the same oriented points\n\n");
+  print_cases_table(cases);
+  std::printf("\n## Scaling of scan2lod reconstruct()\n\n");
+  print_scaling_table(cases);
+  std::printf("\n## Notes\n\n");
+  print_notes(cases, s, info);
+  std::printf("\n## Summary: scan2lod against the best peer\n\n");
+  print_summary(cases);
 }
 
 // The first of `candidates` (relative to the source tree) that exists, or "".
@@ -596,56 +983,70 @@ std::string default_path(std::initializer_list<const char*> candidates) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Times scan2lod's reconstruction against PCL's MarchingCubesHoppe; prints a markdown report"};
+  CLI::App app{"Times scan2lod's reconstruction against PCL, Open3D and VTK on the same oriented "
+               "points; prints a markdown report"};
+  Settings s;
   // The repository's own bunny if it ships one, else the shared copy beside the checkout.
-  std::string input = default_path({"data/bunny/bun.conf", "../shared/data/bunny/data/bun.conf"});
-  std::string reference = default_path({"../shared/data/bunny/reconstruction/bun_zipper.ply"});
-  bool quick = false, pcl_256 = false;
-  double pcl_timeout = 0;
-  int runs = 3;
-  std::size_t samples = 1000000;
-  app.add_option("--input", input, "Scans to reconstruct (.conf, range-grid PLYs, ...)");
-  app.add_option("--reference", reference, "Surface to measure fidelity against; empty: none");
-  app.add_flag("--quick", quick, "R=64 only, one run each: an end-to-end check in about a minute");
-  app.add_flag("--pcl-256", pcl_256, "Also run PCL at R=256 (about 9 minutes)");
-  app.add_option("--pcl-timeout", pcl_timeout, "Kill a PCL case after this many seconds (0: never)");
-  app.add_option("--runs", runs, "scan2lod runs per case, median reported")->check(CLI::PositiveNumber);
-  app.add_option("--samples", samples, "Metro samples per direction for fidelity");
+  s.input = default_path({"data/bunny/bun.conf", "../shared/data/bunny/data/bun.conf"});
+  s.reference = default_path({"../shared/data/bunny/reconstruction/bun_zipper.ply"});
+  app.add_option("--input", s.input, "Scans to reconstruct (.conf, range-grid PLYs, ...)");
+  app.add_option("--reference", s.reference, "Surface to measure fidelity against; empty: none");
+  app.add_flag("--quick", s.quick,
+               "Small settings (R=64 and 128, PCL MC 64, Poisson depth 6), one run each, "
+               "implies --no-slow (so no VTK): an end-to-end check in under a minute");
+  app.add_flag("--pcl-256", s.pcl_256,
+               "Also run PCL MarchingCubesHoppe at R=256 (5 to 9 minutes)");
+  app.add_flag("--no-slow", s.no_slow, "Skip every peer expected to take over a minute");
+  app.add_option("--runs", s.runs, "Runs of a case under --repeat-under seconds; median reported")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--repeat-under", s.repeat_under,
+                 "Repeat a case only if its first run took under this many seconds");
+  app.add_option("--timeout", s.timeout, "Kill a case after this many seconds (0: never)");
+  app.add_option("--trim", s.trim, "Open3D Poisson: drop vertices below this density quantile")
+      ->check(CLI::Range(0.0, 0.5));
+  app.add_option("--samples", s.samples, "Metro samples per direction for fidelity");
+  app.add_option("--only", s.only,
+                 "Run only the cases whose name (e.g. \"Open3D Poisson depth 8\") contains this; "
+                 "the others are listed as skipped");
   CLI11_PARSE(app, argc, argv);
-  if (input.empty()) {
+  if (s.input.empty()) {
     std::fprintf(stderr, "no input: neither %s/data/bunny/bun.conf nor ../shared/data/bunny exists; "
                          "pass --input\n", SCAN2LOD_SOURCE_DIR);
     return 2;
   }
-  if (quick && app.count("--runs") == 0) runs = 1;
-  const std::vector<int> resolutions = quick ? std::vector<int>{64} : std::vector<int>{128, 256};
-  const int job_resolution = resolutions.back();
+  if (s.quick) {
+    if (app.count("--runs") == 0) s.runs = 1;
+    s.no_slow = true;
+  }
+  const std::vector<int> resolutions =
+      s.quick ? std::vector<int>{64, 128} : std::vector<int>{64, 128, 256, 512};
+  const std::vector<int> hoppe_resolutions =
+      s.quick ? std::vector<int>{64} : std::vector<int>{64, 128, 256};
+  const std::vector<int> poisson_depths = s.quick ? std::vector<int>{6} : std::vector<int>{8, 9};
+  const int vtk_samples = s.quick ? 64 : 128;
+  const int job_resolution = s.quick ? 64 : ReconstructOptions{}.resolution;
   Progress::set_quiet(true);
 
+  RunInfo info;
   // Other jobs on the machine show up here and in the spread of the runs.
-  const std::string load_at_start = load_average();
-  std::string command_line = "scan2lod_bench_reconstruct";
-  for (int i = 1; i < argc; ++i) command_line += std::string(" ") + argv[i];
+  info.load_at_start = load_average();
+  info.command_line = "scan2lod_bench_reconstruct";
+  for (int i = 1; i < argc; ++i) info.command_line += std::string(" ") + argv[i];
 
-  char dir_template[] = "/tmp/scan2lod_bench.XXXXXX";
+  char dir_template[] = "/tmp/scan2lod_reconstruct_bench.XXXXXX";
   if (!mkdtemp(dir_template)) {
     std::perror("mkdtemp");
     return 1;
   }
   const fs::path work_dir(dir_template);
   const auto dump_path = [&](const std::string& name) { return (work_dir / name).string(); };
-  const auto log = [](const std::string& what, const Outcome& o) {
-    std::fprintf(stderr, "  %-28s %s, peak %.0f MiB\n", what.c_str(),
-                 o.status == Outcome::ok ? (fixed(o.seconds, 2) + " s").c_str() : o.message.c_str(),
-                 o.peak_mib);
-  };
 
   // Points, loaded in a child (load_oriented_points uses OpenMP).
-  std::fprintf(stderr, "loading %s\n", input.c_str());
+  std::fprintf(stderr, "loading %s\n", s.input.c_str());
   const std::string points_dump = dump_path("points.bin");
   const Outcome loaded = run_in_child([&] {
     const auto start = std::chrono::steady_clock::now();
-    dump_points(points_dump, load_oriented_points({input}));
+    dump_points(points_dump, load_oriented_points({s.input}));
     return seconds_since(start);
   }, 0);
   if (loaded.status != Outcome::ok) {
@@ -655,114 +1056,163 @@ int main(int argc, char** argv) {
   }
   const OrientedPoints points = undump_points(points_dump);
   const Aabb box = bounds(points.positions);
+  info.points = points.size();
   // A child that does nothing: the floor every case's peak includes.
-  const double baseline_mib = run_in_child([] { return 0.0; }, 0).peak_mib;
-  std::fprintf(stderr, "  %zu points; an idle child peaks at %.0f MiB\n", points.size(), baseline_mib);
+  info.baseline_mib = run_in_child([] { return 0.0; }, 0).peak_mib;
+  std::fprintf(stderr, "  %zu points; an idle child peaks at %.0f MiB\n", points.size(),
+               info.baseline_mib);
 
-  std::vector<Row> rows;
-  rows.reserve(2 * resolutions.size() + 1);  // rows point at their peers: no reallocation
-  const ReconstructOptions defaults;
-  int case_id = 0;
+  std::vector<Case> cases;
+  const auto add = [&](Case c) {
+    c.mesh_path = dump_path("case" + std::to_string(cases.size()) + ".bin");
+    cases.push_back(std::move(c));
+  };
+  // `expected` is the peer's time on the bunny on the 2-core machine this
+  // benchmark was written on, without other load; --no-slow skips those over
+  // a minute.
+  const auto add_peer = [&](Case c, double expected) {
+    if (c.skipped.empty() && s.no_slow && expected > 60)
+      c.skipped = "skipped (--no-slow; ~" + fixed(expected, 0) + " s)";
+    add(std::move(c));
+  };
+
   for (const int R : resolutions) {
-    const CubeGrid grid = make_cube_grid(box, R);
-    const float ignore = pcl_ignore_distance(points, grid.cube_size, defaults.distance);
-
-    Row pcl;
-    pcl.method = "PCL MarchingCubesHoppe";
-    pcl.resolution = R;
-    pcl.soup = true;
-    pcl.cube_size = grid.cube_size;
-    pcl.ignore_squared = ignore;
-    if (R <= 128 || pcl_256) {
-      pcl.mesh_path = dump_path("case" + std::to_string(case_id++) + ".bin");
-      std::fprintf(stderr, "PCL R=%d (one run)\n", R);
-      pcl.runs.push_back(run_in_child([&] {
-        double seconds = 0;
-        dump_mesh(pcl.mesh_path, run_pcl(points, grid, ignore, &seconds));
-        return seconds;
-      }, pcl_timeout));
-      log("run 1", pcl.runs.back());
-    } else {
-      pcl.skipped = "skipped (--pcl-256 to run, ~9 min)";
-    }
-
-    Row ours;
-    ours.method = "scan2lod reconstruct()";
-    ours.resolution = R;
-    ours.cube_size = grid.cube_size;
-    ours.mesh_path = dump_path("case" + std::to_string(case_id++) + ".bin");
-    std::fprintf(stderr, "scan2lod R=%d (%d run%s)\n", R, runs, runs > 1 ? "s" : "");
-    for (int run = 0; run < runs; ++run) {
-      ours.runs.push_back(run_in_child([&] {
-        ReconstructOptions options;
-        options.resolution = R;
-        const auto start = std::chrono::steady_clock::now();
-        const Reconstruction result = reconstruct(points, options);
-        const double seconds = seconds_since(start);
-        if (run == 0) dump_mesh(ours.mesh_path, result.mesh);
-        return seconds;
-      }, 0));
-      log("run " + std::to_string(run + 1), ours.runs.back());
-    }
-    rows.push_back(std::move(ours));
-    rows.push_back(std::move(pcl));
-    rows[rows.size() - 2].peer = &rows.back();
+    Case c;
+    c.kind = Case::ours;
+    c.method = kOurs;
+    c.setting = "R=" + std::to_string(R);
+    c.resolution = R;
+    c.work = [&points, R](double* seconds, ReconstructStats* stats) {
+      ReconstructOptions options;
+      options.resolution = R;
+      const auto start = std::chrono::steady_clock::now();
+      Reconstruction result = reconstruct(points, options);
+      *seconds = seconds_since(start);
+      *stats = result.stats;
+      return std::move(result.mesh);
+    };
+    add(std::move(c));
   }
+  for (const int R : hoppe_resolutions) {
+    const CubeGrid grid = make_cube_grid(box, R);
+    const float ignore = pcl_ignore_distance(points, grid.cube_size, ReconstructOptions{}.distance);
+    Case c;
+    c.method = kPclHoppe;
+    c.setting = "R=" + std::to_string(R);
+    c.resolution = R;
+    c.soup = true;
+    c.note = "cube size " + fixed(grid.cube_size * 1e3, 3) + " mm, distance ignore " +
+             fixed(std::sqrt(ignore) * 1e3, 3) + " mm (squared: " + fixed(ignore * 1e6, 3) + " mm²)";
+    c.work = [&points, grid, ignore](double* seconds, ReconstructStats*) {
+      return run_pcl_hoppe(points, grid, ignore, seconds);
+    };
+    if (R > 128 && !s.pcl_256) c.skipped = "skipped (--pcl-256 to run, 5–9 min)";
+    // Dense grid: R^3 corners, one kd-tree query each.
+    add_peer(std::move(c), R <= 64 ? 6 : R <= 128 ? 44 : 320 * std::pow(R / 256.0, 3));
+  }
+  for (const int depth : poisson_depths) {
+    Case pcl_case;
+    pcl_case.method = kPclPoisson;
+    pcl_case.setting = "depth " + std::to_string(depth);
+    pcl_case.resolution = 1 << depth;
+    pcl_case.work = [&points, depth](double* seconds, ReconstructStats*) {
+      return run_pcl_poisson(points, depth, seconds);
+    };
+    add_peer(std::move(pcl_case), depth <= 8 ? 13 : 25 * std::pow(4, depth - 9));
 
-  Row job;
-  job.method = "scan2lod job (files → mesh)";
-  job.resolution = job_resolution;
-  job.mesh_path = dump_path("case" + std::to_string(case_id++) + ".bin");
-  for (const Row& r : rows)
-    if (r.soup && r.resolution == job_resolution) job.peer = &r;
-  std::fprintf(stderr, "scan2lod job R=%d (%d run%s)\n", job_resolution, runs, runs > 1 ? "s" : "");
-  for (int run = 0; run < runs; ++run) {
-    job.runs.push_back(run_in_child([&] {
+    Case o3d;
+    o3d.method = kOpen3dPoisson;
+    o3d.setting = "depth " + std::to_string(depth);
+    o3d.resolution = 1 << depth;
+    const double trim = s.trim;
+    o3d.work = [&points, depth, trim](double* seconds, ReconstructStats*) {
+      return run_open3d_poisson(points, depth, trim, seconds);
+    };
+    add_peer(std::move(o3d), depth <= 8 ? 5 : 30 * std::pow(4, depth - 9));
+  }
+  {
+    const double spacing = vtk_sample_spacing(box, vtk_samples);
+    Case c;
+    c.method = kVtk;
+    c.setting = std::to_string(vtk_samples) + " samples/side";
+    c.resolution = vtk_samples;
+    const Vec3d padded = box.extent().cast<double>() + Vec3d::Constant(4 * spacing);
+    c.note = "sample spacing " + fixed(spacing * 1e3, 3) + " mm, grid " +
+             std::to_string(int(padded.x() / spacing)) + "×" + std::to_string(int(padded.y() / spacing)) +
+             "×" + std::to_string(int(padded.z() / spacing));
+    c.work = [&points, spacing](double* seconds, ReconstructStats*) {
+      return run_vtk(points, spacing, seconds);
+    };
+    // Mostly orienting the normals, whatever the grid: 215 s at 64, 300 s at 128.
+    add_peer(std::move(c), 300);
+  }
+  {
+    Case c;
+    c.kind = Case::job;
+    c.method = kJob;
+    c.setting = "R=" + std::to_string(job_resolution);
+    c.resolution = job_resolution;
+    const std::string input = s.input;
+    c.work = [input, job_resolution](double* seconds, ReconstructStats* stats) {
       ReconstructOptions options;
       options.resolution = job_resolution;
       const auto start = std::chrono::steady_clock::now();
-      const Reconstruction result = reconstruct(load_oriented_points({input}), options);
-      const double seconds = seconds_since(start);
-      if (run == 0) dump_mesh(job.mesh_path, result.mesh);
-      return seconds;
-    }, 0));
-    log("run " + std::to_string(run + 1), job.runs.back());
+      Reconstruction result = reconstruct(load_oriented_points({input}), options);
+      *seconds = seconds_since(start);
+      *stats = result.stats;
+      return std::move(result.mesh);
+    };
+    add(std::move(c));
   }
-  rows.push_back(std::move(job));
+  // Report order: by comparable R, scan2lod first in each group, the job last.
+  std::stable_sort(cases.begin(), cases.end(), [](const Case& a, const Case& b) {
+    const auto key = [](const Case& c) {
+      return std::make_tuple(c.kind == Case::job, c.resolution, c.kind != Case::ours);
+    };
+    return key(a) < key(b);
+  });
+
+  for (Case& c : cases) {
+    if (c.skipped.empty() && c.name().find(s.only) == std::string::npos)
+      c.skipped = "skipped (--only)";
+    if (c.skipped.empty()) run_case(c, s.runs, s.repeat_under, s.timeout);
+    else std::fprintf(stderr, "%s: %s\n", c.name().c_str(), c.skipped.c_str());
+  }
+
+  info.load_at_end = load_average();
 
   // Measuring, in this process: no more forks from here on.
   std::optional<TriangleMesh> ref;
-  if (!reference.empty()) {
+  if (!s.reference.empty()) {
     try {
-      ref = read_mesh(reference);
+      ref = read_mesh(s.reference);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "reference unreadable, fidelity skipped: %s\n", e.what());
-      reference.clear();
+      s.reference.clear();
     }
   }
-  for (Row& r : rows) {
-    if (r.runs.empty() || r.runs[0].status != Outcome::ok) continue;
-    std::fprintf(stderr, "measuring %s R=%d\n", r.method.c_str(), r.resolution);
+  for (Case& c : cases) {
+    if (c.runs.empty() || c.runs[0].status != Outcome::ok) continue;
+    std::fprintf(stderr, "measuring %s\n", c.name().c_str());
     try {
-      TriangleMesh mesh = undump_mesh(r.mesh_path);
-      if (r.soup) {
-        r.exact_weld = mesh_topology(weld_exact(mesh));
-        r.weld_tolerance = weld_tolerance(mesh);
-        mesh = weld_within(mesh, r.weld_tolerance);
+      TriangleMesh mesh = undump_case(c.mesh_path, &c.stats);
+      if (c.soup) {
+        c.exact_weld = mesh_topology(weld_exact(mesh));
+        c.weld_tolerance = weld_tolerance(mesh);
+        mesh = weld_within(mesh, c.weld_tolerance);
       }
-      r.topology = mesh_topology(mesh);
+      c.topology = mesh_topology(mesh);
       if (ref && !mesh.triangles.empty()) {
         CompareOptions options;
-        options.samples = samples;
-        r.fidelity = compare_surfaces(mesh, *ref, options);
+        options.samples = s.samples;
+        c.fidelity = compare_surfaces(mesh, *ref, options);
       }
     } catch (const std::exception& e) {
-      r.measure_error = e.what();
+      c.measure_error = e.what();
     }
   }
   fs::remove_all(work_dir);
 
-  print_report(rows, command_line, load_at_start, input, reference, points.size(), baseline_mib,
-               pcl_256, pcl_timeout);
+  print_report(cases, s, info);
   return 0;
 }

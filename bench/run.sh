@@ -7,14 +7,23 @@
 #   --build DIR  build directory holding bin/scan2lod_bench_reconstruct
 #                (default: $SCAN2LOD_BUILD_DIR, else <repo>/build)
 #   --write      write the report to bench/REPORT.md instead of stdout
-#   anything else goes to the benchmark: --quick, --pcl-256, --pcl-timeout S,
-#   --runs N, --input FILE, --reference FILE, --samples N (see --help)
+#   anything else goes to the benchmark: --quick, --pcl-256, --no-slow,
+#   --runs N, --repeat-under S, --timeout S, --trim Q, --only TEXT,
+#   --input FILE, --reference FILE, --samples N (see --help)
 #
 # Examples:
-#   bench/run.sh --build build-bench --quick          # ~20 s end-to-end check
-#   bench/run.sh --build build-bench --write          # R=128 and 256, PCL at 128 (~2 min)
-#   bench/run.sh --build build-bench --write --pcl-256  # adds PCL at 256 (~9 min more)
+#   bench/run.sh --build build-bench --quick            # end-to-end check, under a minute
+#   bench/run.sh --build build-bench --no-slow          # peers under a minute only (~4 min)
+#   bench/run.sh --build build-bench --write            # every peer but PCL MC 256 (~10 min)
+#   bench/run.sh --build build-bench --write --pcl-256  # adds PCL MC at R=256 (5-9 min more)
 set -euo pipefail
+
+# libgomp spins at barriers by default. On a shared 2-core machine another
+# process then slows OpenMP code several-fold (Open3D's Poisson at depth 8:
+# 5 s -> 42 s beside one compile), so the times would measure the neighbours.
+# Passive waiting keeps them about the work; the report says which policy ran.
+# OMP_WAIT_POLICY=active bench/run.sh ... measures libgomp's default instead.
+export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 repo="$(dirname "$here")"

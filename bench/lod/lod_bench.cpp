@@ -1,0 +1,1312 @@
+// LOD benchmark: scan2lod's prioritized marching-cube octree (seed 003 §5-6)
+// against the mesh simplifiers a user would otherwise reach for, on the same
+// mesh and at the same triangle counts (the Stanford bunny scans by default).
+//
+// What is measured, each timed case in its own forked child process:
+//   1. Model build, --runs times (median): reconstruct(); the octree stage as
+//      `scan2lod build` runs it (a PointIndex kd-tree for the unlimited
+//      signed-distance field, then build_mc_octree()); number_nodes(). "Model
+//      build" = kd-tree + octree + numbering. Peak MiB: the child's ru_maxrss.
+//   2. Extraction at 100, 80, 60, 40, 20, 5 and 1 % of the LOD array
+//      (priority_for_percent): extract_lod() alone, repeated at least --reps
+//      times and for at least 0.25 s with the scratch vectors reused, median
+//      and range; output triangles; triangles per second; and extract_lod() +
+//      compact_lod() (a self-contained mesh), median over as many repetitions.
+//   3. Peers, each simplifying the SAME full mesh (compact_lod of the 100 %
+//      extraction) to the triangle count of each scan2lod level below 100 %:
+//      meshopt_simplify and meshopt_simplifySloppy (meshoptimizer), OpenMesh
+//      Decimater + ModQuadricT, VTK vtkQuadricDecimation and
+//      vtkQuadricClustering, Open3D SimplifyQuadricDecimation and
+//      SimplifyVertexClustering. Seconds are the library call alone: copying
+//      the mesh into the library's types and back is outside the timer. A
+//      peer with no triangle-count target (vtkQuadricClustering divisions,
+//      Open3D voxel size) has its setting searched in its first run, outside
+//      the timer, for the count closest to the target; later runs reuse it.
+//      A case whose first run took under --repeat-under seconds runs --runs
+//      times (median); every run is killed after --timeout seconds, and a
+//      failed, crashed or killed peer is reported as such.
+//   4. Fidelity, in the parent after every child is done: two-sided mean
+//      surface distance (compare_surfaces, fixed seed, --samples per
+//      direction) of each scan2lod level and each peer's output to the full
+//      mesh, i.e. the mean of the two directions' means, in 1e-3 of the full
+//      mesh's bounding-box diagonal; and mesh_topology (boundary loops,
+//      non-manifold edges, components) of each.
+//   5. Ratios, all from this run: meshopt_simplify seconds / extract_lod
+//      seconds at each level (goal >= 100), scan2lod error / peer error (goal:
+//      below 1 against every vertex-clustering peer, at most 1.5 against every
+//      quadric edge-collapse peer); and the report says which goals are met.
+//
+// Children get the work by fork() without exec, so the parent never runs
+// OpenMP (reconstruct, load_oriented_points, compare_surfaces) before the last
+// child is done: libgomp's thread pool does not survive fork. Points are
+// loaded in a child, the model is built in children and handed back through a
+// .mco file, and the parent only measures once every timed case has finished.
+//
+// Output: a markdown report on stdout (and, with --write, in
+// bench/lod/REPORT.md); progress on stderr.
+
+#include "acquisition/load_inputs.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "core/types.h"
+#include "lod/extract.h"
+#include "lod/lod_array.h"
+#include "lod/mc_octree.h"
+#include "lod/model_file.h"
+#include "measure/surface_distance.h"
+#include "measure/topology.h"
+#include "reconstruct/marching_cubes.h"
+#include "reconstruct/signed_distance.h"
+
+#include <CLI/CLI.hpp>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+#include <meshoptimizer.h>
+#include <open3d/geometry/TriangleMesh.h>
+#include <open3d/utility/Logging.h>
+#include <vtkCellArray.h>
+#include <vtkIdList.h>
+#include <vtkNew.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkQuadricClustering.h>
+#include <vtkQuadricDecimation.h>
+#include <vtkSmartPointer.h>
+
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/utsname.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace scan2lod;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
+std::string format(const char* fmt, ...) {
+  va_list args;
+  va_start(args, fmt);
+  va_list copy;
+  va_copy(copy, args);
+  const int n = std::vsnprintf(nullptr, 0, fmt, copy);
+  va_end(copy);
+  std::string out(std::size_t(std::max(n, 0)), '\0');
+  std::vsnprintf(out.data(), out.size() + 1, fmt, args);
+  va_end(args);
+  return out;
+}
+
+std::string fixed(double v, int digits) { return format("%.*f", digits, v); }
+
+// ---------------------------------------------------------------------------
+// Plain binary dumps for handing points and meshes from children to the parent.
+
+template <typename T>
+void write_array(std::ofstream& out, const std::vector<T>& v) {
+  static_assert(std::is_standard_layout_v<T>);
+  const std::uint64_t n = v.size();
+  out.write(reinterpret_cast<const char*>(&n), sizeof n);
+  out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(n * sizeof(T)));
+}
+
+template <typename T>
+void read_array(std::ifstream& in, std::vector<T>* v) {
+  std::uint64_t n = 0;
+  in.read(reinterpret_cast<char*>(&n), sizeof n);
+  if (!in) return;
+  v->resize(n);
+  in.read(reinterpret_cast<char*>(v->data()), std::streamsize(n * sizeof(T)));
+}
+
+void dump_points(const std::string& path, const OrientedPoints& p) {
+  std::ofstream out(path, std::ios::binary);
+  write_array(out, p.positions);
+  write_array(out, p.normals);
+  write_array(out, p.colors);
+  write_array(out, p.confidence);
+  write_array(out, p.spacing);
+  if (!out) throw InputError(path, "could not write the points dump");
+}
+
+OrientedPoints undump_points(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  OrientedPoints p;
+  read_array(in, &p.positions);
+  read_array(in, &p.normals);
+  read_array(in, &p.colors);
+  read_array(in, &p.confidence);
+  read_array(in, &p.spacing);
+  if (!in) throw InputError(path, "truncated points dump");
+  return p;
+}
+
+// Positions and triangles only: nothing else enters a measure.
+void dump_mesh(const std::string& path, const TriangleMesh& m) {
+  std::ofstream out(path, std::ios::binary);
+  write_array(out, m.positions);
+  write_array(out, m.triangles);
+  if (!out) throw InputError(path, "could not write the mesh dump");
+}
+
+TriangleMesh undump_mesh(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  TriangleMesh m;
+  read_array(in, &m.positions);
+  read_array(in, &m.triangles);
+  if (!in) throw InputError(path, "truncated mesh dump");
+  return m;
+}
+
+// ---------------------------------------------------------------------------
+// One piece of work in a forked child.
+
+// What a child reports: a few numbers whose meaning depends on the work.
+using Values = std::array<double, 8>;
+
+struct Outcome {
+  enum Status { ok, failed, timed_out, crashed } status = failed;
+  Values values{};
+  double peak_mib = 0;  // ru_maxrss of the child, also for killed children
+  std::string message;  // why it failed
+};
+
+// Fixed size and below PIPE_BUF, so one write() and no blocking before the read.
+struct ChildMessage {
+  Values values{};
+  int ok = 0;
+  char error[1024] = {};
+};
+static_assert(sizeof(ChildMessage) <= PIPE_BUF);
+
+// Runs `work` in a child; kills it after `timeout` seconds if timeout > 0.
+Outcome run_in_child(const std::function<Values()>& work, double timeout) {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  int fds[2];
+  if (pipe(fds) != 0) throw std::runtime_error("pipe() failed");
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork() failed");
+  if (pid == 0) {
+    close(fds[0]);
+    ChildMessage msg;
+    try {
+      msg.values = work();
+      msg.ok = 1;
+    } catch (const std::exception& e) {
+      std::snprintf(msg.error, sizeof msg.error, "%s", e.what());
+    }
+    [[maybe_unused]] const ssize_t written = write(fds[1], &msg, sizeof msg);
+    _exit(0);  // no atexit handlers or static destructors of the parent's state
+  }
+  close(fds[1]);
+
+  const auto start = Clock::now();
+  int status = 0;
+  rusage usage{};
+  bool killed = false;
+  for (;;) {
+    const pid_t done = wait4(pid, &status, killed ? 0 : WNOHANG, &usage);
+    if (done == pid) break;
+    if (done < 0 && errno != EINTR) throw std::runtime_error("wait4() failed");
+    if (!killed && timeout > 0 && seconds_since(start) > timeout) {
+      kill(pid, SIGKILL);
+      killed = true;
+      continue;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+
+  Outcome out;
+  out.peak_mib = double(usage.ru_maxrss) / 1024.0;  // KiB on Linux
+  ChildMessage msg;
+  const ssize_t got = read(fds[0], &msg, sizeof msg);
+  close(fds[0]);
+  if (killed) {
+    out.status = Outcome::timed_out;
+    out.message = "killed at the " + std::to_string(int(timeout)) + " s timeout";
+  } else if (WIFSIGNALED(status)) {
+    out.status = Outcome::crashed;
+    out.message = std::string("crashed: ") + strsignal(WTERMSIG(status));
+  } else if (got != ssize_t(sizeof msg) || !msg.ok) {
+    out.status = Outcome::failed;
+    out.message = got == ssize_t(sizeof msg) ? msg.error : "exited without a result";
+  } else {
+    out.status = Outcome::ok;
+    out.values = msg.values;
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// The peers. Each takes the full mesh and a target triangle count, copies the
+// mesh into its library's types (untimed) and returns the simplified mesh.
+
+struct PeerRun {
+  double seconds = 0;  // the simplification call alone
+  // The searched setting (divisions, voxel size): in, a previous run's, which
+  // skips the search (NaN: search); out, the one used. Other peers report a
+  // number of their own here (meshopt's error estimate).
+  double setting = std::numeric_limits<double>::quiet_NaN();
+  double rejected = 0;  // input triangles the library refused (OpenMesh)
+};
+
+using PeerWork = std::function<TriangleMesh(const TriangleMesh& full, std::int64_t target, PeerRun* run)>;
+
+// meshopt_simplify (edge collapse under a quadric error, keeping the topology)
+// or meshopt_simplifySloppy (vertex clustering on a searched grid). A target
+// error of 1 (the whole mesh's extent) lets the count decide where they stop.
+TriangleMesh run_meshopt(const TriangleMesh& full, std::int64_t target, bool sloppy, PeerRun* run) {
+  std::vector<unsigned int> indices;
+  indices.reserve(3 * full.triangles.size());
+  for (const Triangle& t : full.triangles)
+    for (int k = 0; k < 3; ++k) indices.push_back(unsigned(t[k]));
+  std::vector<unsigned int> out(indices.size());
+  const float* positions = full.positions[0].data();
+  const std::size_t target_indices = 3 * std::size_t(target);
+  float error = 0;
+  const auto start = Clock::now();
+  const std::size_t n =
+      sloppy ? meshopt_simplifySloppy(out.data(), indices.data(), indices.size(), positions,
+                                      full.positions.size(), sizeof(Vec3f), target_indices, 1.0f, &error)
+             : meshopt_simplify(out.data(), indices.data(), indices.size(), positions,
+                                full.positions.size(), sizeof(Vec3f), target_indices, 1.0f, 0, &error);
+  run->seconds = seconds_since(start);
+  run->setting = error;
+  TriangleMesh mesh;
+  mesh.positions = full.positions;  // indices refer to the input's vertices
+  mesh.triangles.resize(n / 3);
+  for (std::size_t i = 0; i < n / 3; ++i)
+    mesh.triangles[i] = {std::int32_t(out[3 * i]), std::int32_t(out[3 * i + 1]), std::int32_t(out[3 * i + 2])};
+  return mesh;
+}
+
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+
+// OpenMesh DecimaterT with ModQuadricT alone (Garland-Heckbert quadrics,
+// no error bound), collapsing until `target` faces remain.
+TriangleMesh run_openmesh(const TriangleMesh& full, std::int64_t target, PeerRun* run) {
+  OmMesh mesh;
+  std::vector<OmMesh::VertexHandle> handles;
+  handles.reserve(full.positions.size());
+  for (const Vec3f& p : full.positions) handles.push_back(mesh.add_vertex(OmMesh::Point(p.x(), p.y(), p.z())));
+  omerr().disable();  // one "complex edge" line per refused face otherwise
+  for (const Triangle& t : full.triangles)
+    if (!mesh.add_face(handles[t[0]], handles[t[1]], handles[t[2]]).is_valid()) run->rejected += 1;
+  omerr().enable();
+
+  using Decimater = OpenMesh::Decimater::DecimaterT<OmMesh>;
+  using Quadric = OpenMesh::Decimater::ModQuadricT<OmMesh>::Handle;
+  const auto start = Clock::now();
+  {
+    Decimater decimater(mesh);
+    Quadric quadric;
+    decimater.add(quadric);
+    decimater.module(quadric).unset_max_err();
+    if (!decimater.initialize()) throw std::runtime_error("OpenMesh Decimater::initialize() failed");
+    decimater.decimate_to_faces(0, std::size_t(target));
+    // Inside the scope: the Decimater's destructor releases the status flags
+    // that tell garbage_collection() what was deleted.
+    mesh.garbage_collection();
+  }
+  run->seconds = seconds_since(start);
+
+  TriangleMesh out;
+  out.positions.reserve(mesh.n_vertices());
+  for (const auto v : mesh.vertices()) {
+    const OmMesh::Point& p = mesh.point(v);
+    out.positions.emplace_back(p[0], p[1], p[2]);
+  }
+  out.triangles.reserve(mesh.n_faces());
+  for (const auto f : mesh.faces()) {
+    Triangle t{};
+    int k = 0;
+    for (const auto v : mesh.fv_range(f)) t[k++] = v.idx();
+    out.triangles.push_back(t);
+  }
+  return out;
+}
+
+vtkSmartPointer<vtkPolyData> to_vtk(const TriangleMesh& m) {
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToFloat();
+  points->SetNumberOfPoints(vtkIdType(m.positions.size()));
+  for (std::size_t i = 0; i < m.positions.size(); ++i) points->SetPoint(vtkIdType(i), m.positions[i].data());
+  vtkNew<vtkCellArray> polys;
+  polys->AllocateExact(vtkIdType(m.triangles.size()), vtkIdType(3 * m.triangles.size()));
+  for (const Triangle& t : m.triangles) {
+    const vtkIdType ids[3] = {t[0], t[1], t[2]};
+    polys->InsertNextCell(3, ids);
+  }
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetPolys(polys);
+  return poly;
+}
+
+TriangleMesh from_vtk(vtkPolyData* poly) {
+  TriangleMesh out;
+  out.positions.resize(std::size_t(poly->GetNumberOfPoints()));
+  for (vtkIdType i = 0; i < poly->GetNumberOfPoints(); ++i) {
+    double p[3];
+    poly->GetPoint(i, p);
+    out.positions[std::size_t(i)] = Vec3d(p[0], p[1], p[2]).cast<float>();
+  }
+  vtkCellArray* polys = poly->GetPolys();
+  out.triangles.reserve(std::size_t(polys->GetNumberOfCells()));
+  vtkNew<vtkIdList> cell;
+  for (polys->InitTraversal(); polys->GetNextCell(cell);) {
+    if (cell->GetNumberOfIds() != 3)
+      throw std::runtime_error("VTK returned a polygon with " + std::to_string(cell->GetNumberOfIds()) +
+                               " corners, not a triangle");
+    out.triangles.push_back({std::int32_t(cell->GetId(0)), std::int32_t(cell->GetId(1)), std::int32_t(cell->GetId(2))});
+  }
+  return out;
+}
+
+// vtkQuadricDecimation (Garland-Heckbert edge collapse) with the reduction
+// that leaves `target` of the input's triangles.
+TriangleMesh run_vtk_decimation(const TriangleMesh& full, std::int64_t target, PeerRun* run) {
+  const vtkSmartPointer<vtkPolyData> input = to_vtk(full);
+  vtkNew<vtkQuadricDecimation> filter;
+  filter->SetInputData(input);
+  filter->SetTargetReduction(1.0 - double(target) / double(full.triangles.size()));
+  const auto start = Clock::now();
+  filter->Update();
+  run->seconds = seconds_since(start);
+  return from_vtk(filter->GetOutput());
+}
+
+// vtkQuadricClustering's divisions per axis for `n` along the box's longest
+// axis: cells as close to cubes as whole numbers allow.
+std::array<int, 3> clustering_divisions(const Aabb& box, int n) {
+  const Vec3f e = box.extent();
+  std::array<int, 3> d{};
+  for (int k = 0; k < 3; ++k) d[k] = std::max(1, int(std::lround(n * e[k] / e.maxCoeff())));
+  return d;
+}
+
+// VTK 9.1 allocates one quadric (88 bytes) per bin of the whole grid, not per
+// occupied bin; divisions are capped so that array stays under 4 GiB.
+int max_clustering_divisions(const Aabb& box) {
+  int n = 8;
+  const auto bytes = [&](int m) {
+    const auto d = clustering_divisions(box, m);
+    return 88.0 * d[0] * d[1] * d[2];
+  };
+  while (bytes(n + 8) < 4.0 * (1 << 30)) n += 8;
+  return n;
+}
+
+// One vtkQuadricClustering pass with n divisions along the longest axis;
+// *seconds, if given, receives the time of the filter alone.
+TriangleMesh vtk_clustering(vtkPolyData* input, const Aabb& box, int n, double* seconds = nullptr) {
+  vtkNew<vtkQuadricClustering> filter;
+  filter->SetInputData(input);
+  filter->AutoAdjustNumberOfDivisionsOff();  // use exactly the divisions asked for
+  const auto d = clustering_divisions(box, n);
+  filter->SetNumberOfDivisions(d[0], d[1], d[2]);
+  const auto start = Clock::now();
+  filter->Update();
+  if (seconds) *seconds = seconds_since(start);
+  return from_vtk(filter->GetOutput());
+}
+
+// The integer in [lo, cap] whose count is closest to target, for a count that
+// grows with it: doubling up from lo (a trial's cost grows with the integer,
+// so the cap is tried only if nothing smaller reaches the target), then
+// bisection and the better neighbour.
+int search_increasing(const std::function<std::int64_t(int)>& count, int lo, int cap, std::int64_t target) {
+  if (count(lo) >= target) return lo;
+  int hi = lo;
+  std::int64_t at_hi = 0;
+  do {
+    lo = hi;
+    hi = std::min(2 * hi, cap);
+    at_hi = count(hi);
+  } while (at_hi < target && hi < cap);
+  if (at_hi <= target) return hi;
+  while (hi - lo > 1) {  // invariant: count(lo) < target < count(hi)
+    const int mid = lo + (hi - lo) / 2;
+    const std::int64_t c = count(mid);
+    if (c == target) return mid;
+    (c < target ? lo : hi) = mid;
+  }
+  return std::llabs(count(lo) - target) <= std::llabs(count(hi) - target) ? lo : hi;
+}
+
+// vtkQuadricClustering (Lindstrom 2000: one vertex per occupied grid cell at
+// its quadric's minimum) with the divisions whose output is closest to target.
+TriangleMesh run_vtk_clustering(const TriangleMesh& full, std::int64_t target, PeerRun* run) {
+  const vtkSmartPointer<vtkPolyData> input = to_vtk(full);
+  const Aabb box = bounds(full.positions);
+  if (std::isnan(run->setting)) {
+    const auto count = [&](int n) { return std::int64_t(vtk_clustering(input, box, n).triangles.size()); };
+    run->setting = search_increasing(count, 8, max_clustering_divisions(box), target);
+  }
+  return vtk_clustering(input, box, int(run->setting), &run->seconds);
+}
+
+open3d::geometry::TriangleMesh to_open3d(const TriangleMesh& m) {
+  open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
+  open3d::geometry::TriangleMesh out;
+  out.vertices_.reserve(m.positions.size());
+  for (const Vec3f& p : m.positions) out.vertices_.push_back(p.cast<double>());
+  out.triangles_.reserve(m.triangles.size());
+  for (const Triangle& t : m.triangles) out.triangles_.emplace_back(t[0], t[1], t[2]);
+  return out;
+}
+
+TriangleMesh from_open3d(const open3d::geometry::TriangleMesh& m) {
+  TriangleMesh out;
+  out.positions.reserve(m.vertices_.size());
+  for (const Eigen::Vector3d& v : m.vertices_) out.positions.push_back(v.cast<float>());
+  out.triangles.reserve(m.triangles_.size());
+  for (const Eigen::Vector3i& t : m.triangles_) out.triangles.push_back({t[0], t[1], t[2]});
+  return out;
+}
+
+// Open3D SimplifyQuadricDecimation (Garland-Heckbert) with the Python API's
+// defaults: no error bound, boundary weight 1.
+TriangleMesh run_open3d_decimation(const TriangleMesh& full, std::int64_t target, PeerRun* run) {
+  const open3d::geometry::TriangleMesh input = to_open3d(full);
+  const auto start = Clock::now();
+  const auto out = input.SimplifyQuadricDecimation(int(target), std::numeric_limits<double>::infinity(), 1.0);
+  run->seconds = seconds_since(start);
+  return from_open3d(*out);
+}
+
+// Open3D SimplifyVertexClustering (average of each voxel's vertices) with the
+// voxel size whose output is closest to target: bisection on log(size), the
+// count falling as the voxels grow.
+TriangleMesh run_open3d_clustering(const TriangleMesh& full, std::int64_t target, PeerRun* run) {
+  const open3d::geometry::TriangleMesh input = to_open3d(full);
+  if (std::isnan(run->setting)) {
+    const double diagonal = bounds(full.positions).diagonal();
+    double lo = diagonal / 8192, hi = diagonal / 4;  // count(lo) high, count(hi) low
+    double best = lo;
+    std::int64_t best_miss = std::numeric_limits<std::int64_t>::max();
+    for (int i = 0; i < 40 && best_miss > target / 500; ++i) {
+      const double mid = std::sqrt(lo * hi);
+      const std::int64_t c = std::int64_t(input.SimplifyVertexClustering(mid)->triangles_.size());
+      if (std::llabs(c - target) < best_miss) best_miss = std::llabs(c - target), best = mid;
+      (c > target ? lo : hi) = mid;
+    }
+    run->setting = best;
+  }
+  const auto start = Clock::now();
+  const auto out = input.SimplifyVertexClustering(run->setting);
+  run->seconds = seconds_since(start);
+  return from_open3d(*out);
+}
+
+// ---------------------------------------------------------------------------
+// Cases.
+
+struct Peer {
+  std::string name;
+  bool clustering = false;  // vertex clustering (goal: beat it), else edge collapse (goal: within 1.5x)
+  bool searched = false;    // PeerRun::setting is searched in the first run and reused
+  PeerWork work;
+  std::string setup;        // how it was set up, for the notes
+  std::function<std::string(double)> describe;  // PeerRun::setting in words, or null
+};
+
+std::vector<Peer> make_peers() {
+  const auto estimate = [](double e) { return "result_error " + format("%.2g", e) + " (relative)"; };
+  std::vector<Peer> peers(7);
+  peers[0].name = "meshopt_simplify";
+  peers[0].work = [](const TriangleMesh& m, std::int64_t t, PeerRun* r) { return run_meshopt(m, t, false, r); };
+  peers[0].setup = "meshoptimizer 0.18 `meshopt_simplify(…, target_index_count = 3 × target, target_error = 1, "
+                   "options = 0)`: quadric edge collapse that keeps the topology, so it may stop above the target";
+  peers[0].describe = estimate;
+
+  peers[1].name = "OpenMesh ModQuadric";
+  peers[1].work = run_openmesh;
+  peers[1].setup = "OpenMesh 9.0 `DecimaterT` with `ModQuadricT` alone (`unset_max_err()`), "
+                   "`decimate_to_faces(0, target)` and `garbage_collection()`, timed together with `initialize()`";
+
+  peers[2].name = "VTK QuadricDecimation";
+  peers[2].work = run_vtk_decimation;
+  peers[2].setup = "VTK 9.1 `vtkQuadricDecimation` with `SetTargetReduction(1 − target / full)`, other settings "
+                   "default (no volume preservation, no attribute error)";
+
+  peers[3].name = "Open3D QuadricDecimation";
+  peers[3].work = run_open3d_decimation;
+  peers[3].setup = "Open3D 0.16 `SimplifyQuadricDecimation(target, maximum_error = ∞, boundary_weight = 1)`";
+
+  peers[4].name = "meshopt_simplifySloppy";
+  peers[4].clustering = true;
+  peers[4].work = [](const TriangleMesh& m, std::int64_t t, PeerRun* r) { return run_meshopt(m, t, true, r); };
+  peers[4].setup = "meshoptimizer 0.18 `meshopt_simplifySloppy(…, target_index_count = 3 × target, "
+                   "target_error = 1)`: vertex clustering on a grid it searches itself";
+  peers[4].describe = estimate;
+
+  peers[5].name = "VTK QuadricClustering";
+  peers[5].clustering = peers[5].searched = true;
+  peers[5].work = run_vtk_clustering;
+  peers[5].setup = "VTK 9.1 `vtkQuadricClustering`, `AutoAdjustNumberOfDivisionsOff()`, n divisions along the "
+                   "longest axis and proportionally fewer along the others (near-cubic cells), n searched by "
+                   "bisection in the first run (untimed) for the count closest to the target";
+  peers[5].describe = [](double n) { return "n = " + fixed(n, 0); };
+
+  peers[6].name = "Open3D VertexClustering";
+  peers[6].clustering = peers[6].searched = true;
+  peers[6].work = run_open3d_clustering;
+  peers[6].setup = "Open3D 0.16 `SimplifyVertexClustering(voxel_size)` (contraction Average), the voxel size "
+                   "searched by bisection on its logarithm in the first run (untimed) for the count closest to "
+                   "the target";
+  peers[6].describe = [](double v) { return "voxel " + fixed(v * 1e3, 3) + " mm"; };
+  return peers;
+}
+
+struct PeerCase {
+  const Peer* peer = nullptr;
+  std::vector<Outcome> runs;
+  std::string mesh_path;
+  double setting = std::numeric_limits<double>::quiet_NaN();
+  double rejected = 0;
+  // measured afterwards in the parent
+  std::optional<MeshTopology> topology;
+  std::optional<SurfaceComparison> fidelity;
+  std::string measure_error;
+
+  bool all_ok() const {
+    if (runs.empty()) return false;
+    for (const Outcome& o : runs)
+      if (o.status != Outcome::ok) return false;
+    return true;
+  }
+  double seconds() const {
+    std::vector<double> s;
+    for (const Outcome& o : runs) s.push_back(o.values[0]);
+    return median(s);
+  }
+  double peak_mib() const {
+    double m = 0;
+    for (const Outcome& o : runs) m = std::max(m, o.peak_mib);
+    return m;
+  }
+};
+
+// A mesh's two-sided mean distance to the full mesh: the mean of both
+// directions' means, in 1e-3 of the full mesh's diagonal.
+double error_1e3(const SurfaceComparison& c) {
+  return 1e3 * 0.5 * (c.a_to_b.mean + c.b_to_a.mean) / c.diagonal;
+}
+
+// The larger direction's 95th percentile and maximum, in 1e-3 of the diagonal:
+// whether an error is spread evenly or comes from a few gross misses.
+std::string tail_cell(const SurfaceComparison& c) {
+  return fixed(1e3 * std::max(c.a_to_b.p95, c.b_to_a.p95) / c.diagonal, 2) + " / " +
+         fixed(1e3 * std::max(c.a_to_b.max, c.b_to_a.max) / c.diagonal, 1);
+}
+
+struct Level {
+  double percent = 0;
+  std::size_t priority = 0;
+  std::int64_t triangles = 0;
+  std::int64_t accumulated = 0;  // the accumulation table's count at `priority`, which should equal it
+  std::size_t vertices = 0;
+  Outcome extraction;  // values: see measure_extraction
+  TriangleMesh mesh;   // compact_lod of the level
+  MeshTopology topology;
+  std::optional<SurfaceComparison> fidelity;
+  std::string measure_error;
+  std::vector<PeerCase> peers;  // empty at 100 %
+
+  double extract_seconds() const { return extraction.values[0]; }
+};
+
+// extract_lod at `priority`, repeated at least `reps` times and for at least
+// 0.25 s, scratch reused. Values: extract median, min, max; extract +
+// compact_lod median; repetitions; triangles.
+Values measure_extraction(const LodModel& model, std::size_t priority, int reps) {
+  std::vector<std::uint8_t> expanded;
+  std::vector<Triangle> triangles;
+  extract_lod(model.tree, model.lod, priority, &expanded, &triangles);  // warm-up: sizes the scratch
+  std::vector<double> alone, with_compact;
+  const auto begin = Clock::now();
+  for (int i = 0; i < 100000 && (i < reps || seconds_since(begin) < 0.25); ++i) {
+    const auto start = Clock::now();
+    extract_lod(model.tree, model.lod, priority, &expanded, &triangles);
+    alone.push_back(seconds_since(start));
+  }
+  const auto begin_compact = Clock::now();
+  for (std::size_t i = 0; i < alone.size() && (int(i) < reps || seconds_since(begin_compact) < 0.25); ++i) {
+    const auto start = Clock::now();
+    extract_lod(model.tree, model.lod, priority, &expanded, &triangles);
+    const TriangleMesh mesh = compact_lod(model.tree, triangles);
+    with_compact.push_back(seconds_since(start));
+    if (mesh.triangles.size() != triangles.size()) throw std::runtime_error("compact_lod lost triangles");
+  }
+  return {median(alone), *std::min_element(alone.begin(), alone.end()),
+          *std::max_element(alone.begin(), alone.end()), median(with_compact), double(alone.size()),
+          double(triangles.size()), 0, 0};
+}
+
+// ---------------------------------------------------------------------------
+// Facts about the run.
+
+std::string source_revision() {
+  const auto run = [](const std::string& command) {
+    std::string out;
+    if (FILE* f = popen(command.c_str(), "r")) {
+      char buf[256];
+      while (std::fgets(buf, sizeof buf, f)) out += buf;
+      pclose(f);
+    }
+    return out;
+  };
+  const std::string git = "git -C '" + std::string(SCAN2LOD_SOURCE_DIR) + "' ";
+  std::string head = run(git + "rev-parse --short HEAD 2>/dev/null");
+  if (head.empty()) return {};
+  head.pop_back();
+  const bool dirty = !run(git + "status --porcelain --untracked-files=no 2>/dev/null").empty();
+  return head + (dirty ? " with uncommitted changes" : "");
+}
+
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string one, five, fifteen;
+  in >> one >> five >> fifteen;
+  return one + " " + five + " " + fifteen;
+}
+
+std::string cpu_model() {
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpuinfo, line))
+    if (line.rfind("model name", 0) == 0 && line.find(':') != std::string::npos) return line.substr(line.find(':') + 2);
+  return {};
+}
+
+struct Settings {
+  std::string input;
+  int resolution = 256;
+  bool quick = false;
+  int runs = 3;
+  double repeat_under = 10;
+  double timeout = 300;
+  int reps = 50;
+  std::size_t samples = 200000;
+  std::uint64_t seed = 1;
+  std::string only;  // run only the peers whose name contains this
+  bool write = false;
+};
+
+struct RunInfo {
+  std::string command_line, load_at_start, load_at_end;
+  std::size_t points = 0;
+  double baseline_mib = 0;
+  double total_seconds = 0;
+  std::vector<Outcome> builds;  // values: reconstruct, kd-tree, octree, numbering, mesh triangles
+  std::size_t nodes = 0, leaves = 0, expansions = 0, full_triangles = 0, full_vertices = 0;
+  double diagonal = 0;
+  int depth = 0;
+};
+
+// ---------------------------------------------------------------------------
+// The report.
+
+std::string status_cell(const std::vector<Outcome>& runs) {
+  for (const Outcome& o : runs)
+    if (o.status != Outcome::ok) return o.message;
+  return {};
+}
+
+// "1.23 (1.20–1.30, 3 runs)" of values[k] over runs, scaled.
+std::string spread_cell(const std::vector<Outcome>& runs, int k, double scale, int digits) {
+  if (const std::string failed = status_cell(runs); !failed.empty()) return failed;
+  std::vector<double> v;
+  for (const Outcome& o : runs) v.push_back(o.values[k] * scale);
+  std::string cell = fixed(median(v), digits);
+  if (v.size() > 1)
+    cell += " (" + fixed(*std::min_element(v.begin(), v.end()), digits) + "–" +
+            fixed(*std::max_element(v.begin(), v.end()), digits) + ", " + std::to_string(v.size()) + " runs)";
+  else
+    cell += " (1 run)";
+  return cell;
+}
+
+std::string percent_label(const Level& l) { return fixed(l.percent, 0) + " %"; }
+
+class Report {
+ public:
+  void add(const char* fmt, ...) __attribute__((format(printf, 2, 3))) {
+    va_list args;
+    va_start(args, fmt);
+    char buf[8192];
+    std::vsnprintf(buf, sizeof buf, fmt, args);
+    va_end(args);
+    text_ += buf;
+  }
+  void add_text(const std::string& s) { text_ += s; }
+  const std::string& text() const { return text_; }
+
+ private:
+  std::string text_;
+};
+
+// A goal's verdict, with the cases that miss it.
+struct Goal {
+  std::string statement;
+  std::vector<std::string> misses;
+  bool measured = false;
+};
+
+void report_build(Report& r, const RunInfo& info) {
+  r.add("## Model build (each run in its own process)\n\n");
+  r.add("| stage | seconds (median, range) |\n|---|---:|\n");
+  r.add("| `reconstruct()` | %s |\n", spread_cell(info.builds, 0, 1, 3).c_str());
+  r.add("| kd-tree for the octree's signed-distance field (`PointIndex`) | %s |\n",
+        spread_cell(info.builds, 1, 1, 3).c_str());
+  r.add("| `build_mc_octree()` | %s |\n", spread_cell(info.builds, 2, 1, 3).c_str());
+  r.add("| `number_nodes()` | %s |\n", spread_cell(info.builds, 3, 1, 3).c_str());
+  std::vector<Outcome> model = info.builds, total = info.builds;
+  for (Outcome& o : model) o.values[0] = o.values[1] + o.values[2] + o.values[3];
+  for (Outcome& o : total) o.values[0] += o.values[1] + o.values[2] + o.values[3];
+  r.add("| **model build** = kd-tree + octree + numbering | **%s** |\n", spread_cell(model, 0, 1, 3).c_str());
+  r.add("| points → model (all four) | %s |\n", spread_cell(total, 0, 1, 3).c_str());
+  double peak = 0;
+  for (const Outcome& o : info.builds) peak = std::max(peak, o.peak_mib);
+  r.add("\nPeak RSS of a build process: %.0f MiB (an idle child of this benchmark peaks at %.0f MiB: "
+        "what every child inherits). Model: resolution %d (depth %d), %zu nodes, %zu leaves, %zu "
+        "expansions (LOD array entries); the full mesh has %zu triangles and %zu vertices, "
+        "bounding-box diagonal %.4f.\n\n",
+        peak, info.baseline_mib, 1 << info.depth, info.depth, info.nodes, info.leaves, info.expansions,
+        info.full_triangles, info.full_vertices, info.diagonal);
+}
+
+void report_extraction(Report& r, const std::vector<Level>& levels, std::size_t full_priority) {
+  r.add("## Extraction by reference\n\n");
+  r.add("| level | priority (%% of the array) | triangles | vertices | `extract_lod` ms (median; min–max; reps) | M triangles/s "
+        "| `extract_lod` + `compact_lod` ms (median) | boundary loops | non-manifold edges | components "
+        "| error to full (1e-3 diag) | p95 / max (1e-3 diag) |\n");
+  r.add("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const Level& l : levels) {
+    const Values& v = l.extraction.values;
+    const std::string error = l.fidelity ? fixed(error_1e3(*l.fidelity), 3) : l.measure_error.empty() ? "—" : "failed";
+    const std::string tail = l.fidelity ? tail_cell(*l.fidelity) : "—";
+    if (l.extraction.status != Outcome::ok) {
+      r.add("| %s | %zu | %lld | %zu | %s | — | — | %zu | %zu | %zu | %s | %s |\n", percent_label(l).c_str(),
+            l.priority, (long long)l.triangles, l.vertices, l.extraction.message.c_str(), l.topology.boundary_loops,
+            l.topology.non_manifold_edges, l.topology.components, error.c_str(), tail.c_str());
+      continue;
+    }
+    r.add("| %s | %zu (%.2f %%) | %lld | %zu | %.3f (%.3f–%.3f; %.0f) | %.1f | %.3f | %zu | %zu | %zu | %s | %s |\n",
+          percent_label(l).c_str(), l.priority, 100.0 * double(l.priority) / double(full_priority), (long long)l.triangles, l.vertices, v[0] * 1e3, v[1] * 1e3,
+          v[2] * 1e3, v[4], double(l.triangles) / v[0] / 1e6, v[3] * 1e3, l.topology.boundary_loops,
+          l.topology.non_manifold_edges, l.topology.components, error.c_str(), tail.c_str());
+  }
+  r.add("\n");
+}
+
+std::string peer_error_cell(const PeerCase& c) {
+  if (!c.runs.empty() && c.runs[0].status != Outcome::ok) return "—";
+  if (c.fidelity) return fixed(error_1e3(*c.fidelity), 3);
+  return c.measure_error.empty() ? "—" : "failed";
+}
+
+void report_peers(Report& r, const std::vector<Level>& levels, double timeout) {
+  r.add("## Peers at scan2lod's triangle counts, on the same full mesh\n\n");
+  r.add("Error: two-sided mean distance to the full mesh, 1e-3 of its diagonal (out→full / full→out in "
+        "parentheses). Time ratio: the peer's seconds / scan2lod's `extract_lod` seconds at that level. "
+        "p95 / max: the larger direction's 95th percentile and maximum distance. Error ratio: scan2lod's error / the "
+        "peer's (below 1: scan2lod is closer).\n\n");
+  for (const Level& l : levels) {
+    if (l.peers.empty()) continue;
+    r.add("### %s of the LOD array: %lld triangles\n\n", percent_label(l).c_str(), (long long)l.triangles);
+    r.add("| method | kind | triangles | seconds (median, range) | time ratio | error (1e-3 diag) | p95 / max "
+          "| error ratio | boundary loops | non-manifold edges | components | peak MiB | setting |\n");
+    r.add("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+    const std::string own_error = l.fidelity ? fixed(error_1e3(*l.fidelity), 3) : "—";
+    const std::string own_detail =
+        l.fidelity ? " (" + fixed(1e3 * l.fidelity->a_to_b.mean / l.fidelity->diagonal, 3) + " / " +
+                         fixed(1e3 * l.fidelity->b_to_a.mean / l.fidelity->diagonal, 3) + ")"
+                   : "";
+    r.add("| **scan2lod `extract_lod`** | octree cut | %lld | %s | 1 | **%s**%s | %s | 1 | %zu | %zu | %zu | %.0f | "
+          "priority %zu |\n",
+          (long long)l.triangles,
+          l.extraction.status == Outcome::ok ? fixed(l.extract_seconds(), 6).c_str() : l.extraction.message.c_str(),
+          own_error.c_str(), own_detail.c_str(), l.fidelity ? tail_cell(*l.fidelity).c_str() : "—", l.topology.boundary_loops, l.topology.non_manifold_edges,
+          l.topology.components, l.extraction.peak_mib, l.priority);
+    for (const PeerCase& c : l.peers) {
+      const Peer& p = *c.peer;
+      const char* kind = p.clustering ? "vertex clustering" : "edge collapse";
+      if (c.runs.empty()) {
+        r.add("| %s | %s | — | skipped (--only) | — | — | — | — | — | — | — | — | |\n", p.name.c_str(), kind);
+        continue;
+      }
+      const bool ok = c.all_ok();
+      std::string time_ratio = "—", error = peer_error_cell(c), error_ratio = "—", detail;
+      if (ok && l.extraction.status == Outcome::ok) time_ratio = fixed(c.seconds() / l.extract_seconds(), 0);
+      if (c.runs[0].status == Outcome::timed_out && l.extraction.status == Outcome::ok)
+        time_ratio = "> " + fixed(timeout / l.extract_seconds(), 0);
+      if (c.fidelity) {
+        detail = " (" + fixed(1e3 * c.fidelity->a_to_b.mean / c.fidelity->diagonal, 3) + " / " +
+                 fixed(1e3 * c.fidelity->b_to_a.mean / c.fidelity->diagonal, 3) + ")";
+        if (l.fidelity) error_ratio = fixed(error_1e3(*l.fidelity) / error_1e3(*c.fidelity), 2);
+      }
+      std::string setting;
+      if (p.describe && !std::isnan(c.setting)) setting = p.describe(c.setting);
+      if (c.rejected > 0) setting += (setting.empty() ? "" : "; ") + fixed(c.rejected, 0) + " input faces refused";
+      const std::string tri = c.topology ? std::to_string(c.topology->triangles) : "—";
+      r.add("| %s | %s | %s | %s | %s | %s%s | %s | %s | %s | %s | %s | %.0f | %s |\n", p.name.c_str(), kind,
+            tri.c_str(), spread_cell(c.runs, 0, 1, 3).c_str(), time_ratio.c_str(), error.c_str(), detail.c_str(),
+            c.fidelity ? tail_cell(*c.fidelity).c_str() : "—", error_ratio.c_str(), c.topology ? std::to_string(c.topology->boundary_loops).c_str() : "—",
+            c.topology ? std::to_string(c.topology->non_manifold_edges).c_str() : "—",
+            c.topology ? std::to_string(c.topology->components).c_str() : "—", c.peak_mib(), setting.c_str());
+    }
+    r.add("\n");
+  }
+}
+
+// Error and time of every method at every level in two compact tables.
+void report_matrices(Report& r, const std::vector<Level>& levels, const std::vector<Peer>& peers) {
+  r.add("## At a glance\n\n");
+  r.add("Error, two-sided mean to the full mesh in 1e-3 of its diagonal (a peer's achieved triangle count "
+        "in brackets where it is more than 1 %% off scan2lod's):\n\n| level | triangles | scan2lod |");
+  for (const Peer& p : peers) r.add(" %s |", p.name.c_str());
+  r.add("\n|---:|---:|---:|");
+  for (std::size_t i = 0; i < peers.size(); ++i) r.add("---:|");
+  r.add("\n");
+  for (const Level& l : levels) {
+    if (l.peers.empty()) continue;
+    r.add("| %s | %lld | **%s** |", percent_label(l).c_str(), (long long)l.triangles,
+          l.fidelity ? fixed(error_1e3(*l.fidelity), 3).c_str() : "—");
+    for (const PeerCase& c : l.peers) {
+      std::string cell = c.runs.empty() ? "skipped" : !c.all_ok() ? c.runs[0].message : peer_error_cell(c);
+      if (c.topology && std::abs(double(c.topology->triangles) - double(l.triangles)) > 0.01 * double(l.triangles))
+        cell += " [" + std::to_string(c.topology->triangles) + "]";
+      r.add(" %s |", cell.c_str());
+    }
+    r.add("\n");
+  }
+  r.add("\nSeconds (scan2lod: `extract_lod` alone; peers: the simplification call, median):\n\n"
+        "| level | scan2lod |");
+  for (const Peer& p : peers) r.add(" %s |", p.name.c_str());
+  r.add("\n|---:|---:|");
+  for (std::size_t i = 0; i < peers.size(); ++i) r.add("---:|");
+  r.add("\n");
+  for (const Level& l : levels) {
+    if (l.peers.empty()) continue;
+    r.add("| %s | **%s** |", percent_label(l).c_str(),
+          l.extraction.status == Outcome::ok ? fixed(l.extract_seconds(), 5).c_str() : "failed");
+    for (const PeerCase& c : l.peers)
+      r.add(" %s |", c.runs.empty() ? "skipped" : c.all_ok() ? fixed(c.seconds(), 3).c_str() : c.runs[0].message.c_str());
+    r.add("\n");
+  }
+  r.add("\n");
+}
+
+std::vector<Goal> evaluate_goals(const std::vector<Level>& levels, const RunInfo& info) {
+  std::vector<Goal> goals(5);
+  goals[0].statement = "Model build (kd-tree + `build_mc_octree` + `number_nodes`) under 1 s";
+  {
+    std::vector<double> v;
+    for (const Outcome& o : info.builds)
+      if (o.status == Outcome::ok) v.push_back(o.values[1] + o.values[2] + o.values[3]);
+    goals[0].measured = !v.empty() && v.size() == info.builds.size();
+    if (goals[0].measured && median(v) >= 1.0) goals[0].misses.push_back("median " + fixed(median(v), 2) + " s");
+  }
+  goals[1].statement = "`extract_lod` at ≥ 50 M triangles/s at every level";
+  goals[2].statement = "`extract_lod` ≥ 100× faster than `meshopt_simplify` at the same count, at every level";
+  goals[3].statement = "scan2lod's error below every vertex-clustering peer's, at every level";
+  goals[4].statement = "scan2lod's error within 1.5× of every quadric edge-collapse peer's, at every level";
+  for (const Level& l : levels) {
+    const std::string at = percent_label(l);
+    if (l.extraction.status == Outcome::ok) {
+      goals[1].measured = true;
+      const double rate = double(l.triangles) / l.extract_seconds() / 1e6;
+      if (rate < 50) goals[1].misses.push_back(at + ": " + fixed(rate, 1) + " M/s");
+    } else {
+      goals[1].misses.push_back(at + ": extraction " + l.extraction.message);
+    }
+    for (const PeerCase& c : l.peers) {
+      if (c.peer->name == "meshopt_simplify" && c.all_ok() && l.extraction.status == Outcome::ok) {
+        goals[2].measured = true;
+        const double ratio = c.seconds() / l.extract_seconds();
+        if (ratio < 100) goals[2].misses.push_back(at + ": " + fixed(ratio, 0) + "×");
+      }
+      if (!c.fidelity || !l.fidelity) continue;
+      const double ratio = error_1e3(*l.fidelity) / error_1e3(*c.fidelity);
+      Goal& g = goals[c.peer->clustering ? 3 : 4];
+      g.measured = true;
+      if (c.peer->clustering ? ratio >= 1 : ratio > 1.5)
+        g.misses.push_back(at + " vs " + c.peer->name + ": " + fixed(ratio, 2) + "×");
+    }
+  }
+  return goals;
+}
+
+void report_goals(Report& r, const std::vector<Goal>& goals) {
+  r.add("## Goals\n\n");
+  for (const Goal& g : goals) {
+    if (!g.measured) {
+      r.add("- **not measured**: %s.\n", g.statement.c_str());
+    } else if (g.misses.empty()) {
+      r.add("- **met**: %s.\n", g.statement.c_str());
+    } else {
+      std::string list;
+      for (const std::string& m : g.misses) list += (list.empty() ? "" : "; ") + m;
+      r.add("- **not met**: %s. Misses (%zu): %s.\n", g.statement.c_str(), g.misses.size(), list.c_str());
+    }
+  }
+  r.add("\n");
+}
+
+void report_notes(Report& r, const Settings& s, const RunInfo& info, const std::vector<Peer>& peers,
+                  const std::vector<Level>& levels) {
+  r.add("## Notes\n\n");
+  r.add("- Every timed case ran in its own forked process. Build and peer cases: %s; killed after %.0f s. "
+        "Peak MiB is the process's `ru_maxrss`, including what it inherits from the parent (points, model, "
+        "full mesh): an idle child peaks at %.0f MiB.\n",
+        s.runs == 1 ? "one run each"
+                    : (std::to_string(s.runs) + " runs (median, range) when the first took under " +
+                       fixed(s.repeat_under, 0) + " s, else one")
+                          .c_str(),
+        s.timeout, info.baseline_mib);
+  r.add("- scan2lod: default `ReconstructOptions` apart from R = %d, all %ld threads for `reconstruct()` and the "
+        "octree's field; `number_nodes` and extraction are single-threaded. Levels are `priority_for_percent(p)`, "
+        "i.e. the largest offered priority (`monotone_priorities`) at or below p %% of the LOD array. "
+        "`extract_lod` was timed at least %d times and for at least 0.25 s per level with its scratch vectors "
+        "reused (the first, sizing call untimed); `compact_lod` adds building a self-contained mesh. The peers' "
+        "times compare with `extract_lod` alone because their outputs, too, are index buffers or meshes the "
+        "library already holds.\n",
+        s.resolution, sysconf(_SC_NPROCESSORS_ONLN), s.reps);
+  r.add("- Peers simplify the full mesh (the model's 100 %% level, `compact_lod`, %zu triangles) to each "
+        "level's triangle count. Their times exclude copying the mesh into the library's types and back.\n",
+        info.full_triangles);
+  for (const Peer& p : peers) r.add("- %s: %s.\n", p.name.c_str(), p.setup.c_str());
+  r.add("- Fidelity: `compare_surfaces(output, full mesh)` with %zu samples per direction and seed %llu; error = "
+        "(mean out→full + mean full→out) / 2 / the full mesh's bounding-box diagonal (%.4f), in 1e-3. Topology "
+        "from `mesh_topology` on the output's index buffer (no welding).\n",
+        s.samples, (unsigned long long)s.seed, info.diagonal);
+  for (const Level& l : levels) {
+    if (!l.measure_error.empty())
+      r.add("- scan2lod at %s: measuring failed: %s\n", percent_label(l).c_str(), l.measure_error.c_str());
+    for (const PeerCase& c : l.peers) {
+      if (!c.measure_error.empty())
+        r.add("- %s at %s: measuring failed: %s\n", c.peer->name.c_str(), percent_label(l).c_str(),
+              c.measure_error.c_str());
+      if (c.topology && c.topology->degenerate_triangles > 0)
+        r.add("- %s at %s: %zu degenerate triangles (no samples on them).\n", c.peer->name.c_str(),
+              percent_label(l).c_str(), c.topology->degenerate_triangles);
+    }
+    if (l.accumulated != l.triangles)
+      r.add("- scan2lod at %s: the accumulation table says %lld triangles, `extract_lod` gave %lld.\n",
+            percent_label(l).c_str(), (long long)l.accumulated, (long long)l.triangles);
+    if (l.extraction.status == Outcome::ok && l.extraction.values[5] != double(l.triangles))
+      r.add("- scan2lod at %s: the timed extraction gave %.0f triangles, not %lld.\n", percent_label(l).c_str(),
+            l.extraction.values[5], (long long)l.triangles);
+    if (l.topology.degenerate_triangles > 0)
+      r.add("- scan2lod at %s: %zu degenerate triangles.\n", percent_label(l).c_str(), l.topology.degenerate_triangles);
+  }
+  r.add("- Whole benchmark: %.0f s wall time.\n", info.total_seconds);
+}
+
+std::string make_report(const Settings& s, const RunInfo& info, const std::vector<Level>& levels,
+                        const std::vector<Peer>& peers) {
+  Report r;
+  utsname u{};
+  uname(&u);
+  char date[64];
+  const std::time_t now = std::time(nullptr);
+  std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
+  const std::string cpu = cpu_model();
+  r.add("# LOD benchmark: scan2lod's marching-cube octree against mesh simplifiers\n\n");
+  r.add("%s · %s · nproc %ld%s%s · load average at start %s, after the timed cases %s\n\n", date, u.machine,
+        sysconf(_SC_NPROCESSORS_ONLN), cpu.empty() ? "" : " · ", cpu.c_str(), info.load_at_start.c_str(),
+        info.load_at_end.c_str());
+  r.add("Command: `%s`  \n", info.command_line.c_str());
+  if (const char* policy = std::getenv("OMP_WAIT_POLICY"))
+    r.add("OpenMP: `OMP_WAIT_POLICY=%s`  \n", policy);
+  else
+    r.add("OpenMP: `OMP_WAIT_POLICY` unset (libgomp's default)  \n");
+  const std::string revision = source_revision();
+  if (!revision.empty()) r.add("Source: %s (at run time)  \n", revision.c_str());
+  r.add("Input: `%s` (%zu oriented points), R = %d\n\n", s.input.c_str(), info.points, s.resolution);
+  report_build(r, info);
+  report_extraction(r, levels, info.expansions);
+  report_goals(r, evaluate_goals(levels, info));
+  report_matrices(r, levels, peers);
+  report_peers(r, levels, s.timeout);
+  report_notes(r, s, info, peers, levels);
+  return r.text();
+}
+
+std::string default_input() {
+  for (const char* c : {"data/bunny/bun.conf", "../shared/data/bunny/data/bun.conf"}) {
+    const fs::path p = fs::path(SCAN2LOD_SOURCE_DIR) / c;
+    if (fs::exists(p)) return fs::weakly_canonical(p).string();
+  }
+  return {};
+}
+
+// Writes `text` to `path` through a temporary file renamed into place, so an
+// interrupted run keeps the old report.
+void write_report(const fs::path& path, const std::string& text) {
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out << text;
+    if (!out) throw InputError(tmp.string(), "could not write the report");
+  }
+  fs::rename(tmp, path);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Times scan2lod's LOD model (build, extraction) against mesh simplifiers at the same triangle "
+               "counts and measures every result's distance to the full mesh; prints a markdown report"};
+  Settings s;
+  s.input = default_input();
+  app.add_option("--input", s.input, "Scans to build the model from (.conf, range-grid PLYs, a mesh, ...)");
+  app.add_option("--resolution", s.resolution, "Leaf cubes per side (a power of two)");
+  app.add_flag("--quick", s.quick, "R = 128, levels 100/20/5 %, one run each: an end-to-end check");
+  app.add_option("--runs", s.runs, "Runs of a build or peer case (median)")->check(CLI::PositiveNumber);
+  app.add_option("--repeat-under", s.repeat_under, "Repeat a peer only if its first run took under this many seconds");
+  app.add_option("--timeout", s.timeout, "Kill a case after this many seconds (0: never)");
+  app.add_option("--reps", s.reps, "Minimum repetitions of each extraction (median)")->check(CLI::PositiveNumber);
+  app.add_option("--samples", s.samples, "Metro samples per direction for fidelity");
+  app.add_option("--seed", s.seed, "Seed of the Metro sampling");
+  app.add_option("--only", s.only, "Run only the peers whose name contains this; the others are listed as skipped");
+  app.add_flag("--write", s.write, "Also write the report to bench/lod/REPORT.md in the source tree");
+  CLI11_PARSE(app, argc, argv);
+  if (s.input.empty()) {
+    std::fprintf(stderr, "no input: neither %s/data/bunny/bun.conf nor ../shared/data/bunny exists; pass --input\n",
+                 SCAN2LOD_SOURCE_DIR);
+    return 2;
+  }
+  if (s.quick) {
+    if (app.count("--resolution") == 0) s.resolution = 128;
+    if (app.count("--runs") == 0) s.runs = 1;
+    if (app.count("--reps") == 0) s.reps = 20;
+  }
+  const std::vector<double> percents =
+      s.quick ? std::vector<double>{100, 20, 5} : std::vector<double>{100, 80, 60, 40, 20, 5, 1};
+  Progress::set_quiet(true);
+  const auto benchmark_start = Clock::now();
+
+  RunInfo info;
+  info.load_at_start = load_average();
+  info.command_line = "scan2lod_bench_lod";
+  for (int i = 1; i < argc; ++i) info.command_line += std::string(" ") + argv[i];
+
+  char dir_template[] = "/tmp/scan2lod_bench_lod.XXXXXX";
+  if (!mkdtemp(dir_template)) {
+    std::perror("mkdtemp");
+    return 1;
+  }
+  const fs::path work_dir(dir_template);
+  const auto work_path = [&](const std::string& name) { return (work_dir / name).string(); };
+  struct Cleanup {
+    fs::path dir;
+    ~Cleanup() { std::error_code ec; fs::remove_all(dir, ec); }
+  } cleanup{work_dir};
+
+  // Points, loaded in a child (load_oriented_points uses OpenMP).
+  std::fprintf(stderr, "loading %s\n", s.input.c_str());
+  const std::string points_dump = work_path("points.bin");
+  const Outcome loaded = run_in_child([&] {
+    dump_points(points_dump, load_oriented_points({s.input}));
+    return Values{};
+  }, 0);
+  if (loaded.status != Outcome::ok) {
+    std::fprintf(stderr, "loading failed: %s\n", loaded.message.c_str());
+    return 1;
+  }
+  const OrientedPoints points = undump_points(points_dump);
+  info.points = points.size();
+
+  // 1. Model builds; the first one also saves the model for the parent.
+  const std::string model_path = work_path("model.mco");
+  for (int run = 0; run < s.runs; ++run) {
+    std::fprintf(stderr, "build %d/%d at R=%d\n", run + 1, s.runs, s.resolution);
+    const Outcome o = run_in_child([&] {
+      ReconstructOptions options;
+      options.resolution = s.resolution;
+      auto start = Clock::now();
+      const Reconstruction r = reconstruct(points, options);
+      const double reconstruct_seconds = seconds_since(start);
+      start = Clock::now();
+      const PointIndex index(points);
+      const double index_seconds = seconds_since(start);
+      const SignedDistanceField field =
+          unlimited_distance_field(points, index, options.distance, float(r.leaves.grid.cube_size));
+      start = Clock::now();
+      LodModel model;
+      model.tree = build_mc_octree(r.leaves, r.mesh, field);
+      const double octree_seconds = seconds_since(start);
+      start = Clock::now();
+      model.lod = number_nodes(model.tree);
+      const double numbering_seconds = seconds_since(start);
+      if (run == 0) save_model(model_path, model);
+      return Values{reconstruct_seconds, index_seconds, octree_seconds, numbering_seconds,
+                    double(r.mesh.triangles.size()), 0, 0, 0};
+    }, s.timeout);
+    std::fprintf(stderr, "  %s, peak %.0f MiB\n",
+                 o.status == Outcome::ok
+                     ? format("reconstruct %.2f s, kd-tree %.2f s, octree %.2f s, numbering %.2f s", o.values[0],
+                              o.values[1], o.values[2], o.values[3]).c_str()
+                     : o.message.c_str(),
+                 o.peak_mib);
+    info.builds.push_back(o);
+    if (run == 0 && o.status != Outcome::ok) {
+      std::fprintf(stderr, "the first build failed; nothing to measure\n");
+      return 1;
+    }
+  }
+  const LodModel model = load_model(model_path);
+  info.depth = model.tree.depth;
+  info.nodes = model.tree.size();
+  info.expansions = model.lod.full();
+  for (std::size_t n = 0; n < model.tree.size(); ++n) info.leaves += model.tree.is_leaf(n);
+
+  // The levels, and the full mesh every peer starts from (pure code: no OpenMP).
+  std::vector<Level> levels;
+  TriangleMesh full;
+  {
+    std::vector<std::uint8_t> expanded;
+    std::vector<Triangle> triangles;
+    for (const double p : percents) {
+      Level l;
+      l.percent = p;
+      l.priority = priority_for_percent(model.lod, p);
+      extract_lod(model.tree, model.lod, l.priority, &expanded, &triangles);
+      l.triangles = std::int64_t(triangles.size());
+      l.accumulated = model.lod.accumulated[l.priority];
+      l.mesh = compact_lod(model.tree, triangles);
+      l.vertices = l.mesh.positions.size();
+      l.topology = mesh_topology(l.mesh);
+      if (l.priority == model.lod.full()) full = l.mesh;
+      levels.push_back(std::move(l));
+    }
+    if (full.triangles.empty()) {
+      extract_lod(model.tree, model.lod, model.lod.full(), &expanded, &triangles);
+      full = compact_lod(model.tree, triangles);
+    }
+  }
+  info.full_triangles = full.triangles.size();
+  info.full_vertices = full.positions.size();
+  info.diagonal = bounds(full.positions).diagonal();
+  info.baseline_mib = run_in_child([] { return Values{}; }, 0).peak_mib;
+
+  // 2. Extraction, one child per level.
+  for (Level& l : levels) {
+    std::fprintf(stderr, "extract %s (priority %zu, %lld triangles)\n", percent_label(l).c_str(), l.priority,
+                 (long long)l.triangles);
+    l.extraction = run_in_child([&] { return measure_extraction(model, l.priority, s.reps); }, s.timeout);
+    if (l.extraction.status == Outcome::ok)
+      std::fprintf(stderr, "  %.3f ms, %.1f M triangles/s\n", l.extract_seconds() * 1e3,
+                   double(l.triangles) / l.extract_seconds() / 1e6);
+    else
+      std::fprintf(stderr, "  %s\n", l.extraction.message.c_str());
+  }
+
+  // 3. Peers at every level below full detail.
+  const std::vector<Peer> peers = make_peers();
+  for (Level& l : levels) {
+    if (l.priority == model.lod.full()) continue;
+    for (const Peer& p : peers) {
+      PeerCase c;
+      c.peer = &p;
+      c.mesh_path = work_path("peer" + std::to_string(&l - levels.data()) + "_" + std::to_string(&p - peers.data()) + ".bin");
+      if (p.name.find(s.only) == std::string::npos) {
+        l.peers.push_back(std::move(c));
+        continue;
+      }
+      std::fprintf(stderr, "%s at %s (%lld triangles)\n", p.name.c_str(), percent_label(l).c_str(),
+                   (long long)l.triangles);
+      for (int run = 0; run < s.runs; ++run) {
+        if (run == 1 && !(c.runs[0].status == Outcome::ok && c.runs[0].values[0] < s.repeat_under)) break;
+        const double known = c.setting;
+        const Outcome o = run_in_child([&] {
+          PeerRun pr;
+          if (p.searched && run > 0) pr.setting = known;  // skip the search
+          const TriangleMesh out = p.work(full, l.triangles, &pr);
+          if (run == 0) dump_mesh(c.mesh_path, out);
+          return Values{pr.seconds, pr.setting, pr.rejected, double(out.triangles.size()), 0, 0, 0, 0};
+        }, s.timeout);
+        if (run == 0 && o.status == Outcome::ok) c.setting = o.values[1], c.rejected = o.values[2];
+        c.runs.push_back(o);
+        std::fprintf(stderr, "  run %d: %s, peak %.0f MiB\n", run + 1,
+                     o.status == Outcome::ok ? format("%.3f s, %.0f triangles", o.values[0], o.values[3]).c_str()
+                                             : o.message.c_str(),
+                     o.peak_mib);
+      }
+      l.peers.push_back(std::move(c));
+    }
+  }
+  info.load_at_end = load_average();
+
+  // 4. Measuring, in this process: no more forks from here on.
+  CompareOptions compare;
+  compare.samples = s.samples;
+  compare.seed = s.seed;
+  for (Level& l : levels) {
+    std::fprintf(stderr, "measuring %s\n", percent_label(l).c_str());
+    try {
+      l.fidelity = compare_surfaces(l.mesh, full, compare);
+    } catch (const std::exception& e) {
+      l.measure_error = e.what();
+    }
+    for (PeerCase& c : l.peers) {
+      if (c.runs.empty() || c.runs[0].status != Outcome::ok) continue;
+      try {
+        const TriangleMesh mesh = undump_mesh(c.mesh_path);
+        c.topology = mesh_topology(mesh);
+        c.fidelity = compare_surfaces(mesh, full, compare);
+      } catch (const std::exception& e) {
+        c.measure_error = e.what();
+      }
+    }
+  }
+  info.total_seconds = seconds_since(benchmark_start);
+
+  const std::string report = make_report(s, info, levels, peers);
+  std::fwrite(report.data(), 1, report.size(), stdout);
+  if (s.write) {
+    const fs::path path = fs::path(SCAN2LOD_SOURCE_DIR) / "bench" / "lod" / "REPORT.md";
+    write_report(path, report);
+    std::fprintf(stderr, "wrote %s\n", path.c_str());
+  }
+  return 0;
+}

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Runs the LOD benchmark from an existing build and prints its markdown report
+# (progress goes to stderr). Builds nothing.
+#
+#   bench/lod/run.sh [--build DIR] [benchmark options...]
+#
+#   --build DIR  build directory holding bin/scan2lod_bench_lod
+#                (default: $SCAN2LOD_BUILD_DIR, else <repo>/build)
+#   anything else goes to the benchmark: --write (also bench/lod/REPORT.md),
+#   --quick, --resolution R, --runs N, --repeat-under S, --timeout S, --reps N,
+#   --samples N, --seed S, --only TEXT, --input FILE (see --help)
+#
+# Examples:
+#   bench/lod/run.sh --build build-lod --quick    # R=128, 3 levels, ~30 s
+#   bench/lod/run.sh --build build-lod --write    # R=256, 7 levels (see REPORT.md for the time)
+set -euo pipefail
+
+# As in bench/run.sh: libgomp's spinning waits make OpenMP code (reconstruct,
+# the octree's field) measure the neighbours on a shared 2-core machine.
+export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+repo="$(dirname "$(dirname "$here")")"
+build="${SCAN2LOD_BUILD_DIR:-$repo/build}"
+args=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --build) build="$2"; shift 2 ;;
+    *) args+=("$1"); shift ;;
+  esac
+done
+
+binary="$build/bin/scan2lod_bench_lod"
+if [[ ! -x "$binary" ]]; then
+  echo "run.sh: no benchmark binary at $binary" >&2
+  echo "  build it first: cmake -S $repo -B $build -DCMAKE_BUILD_TYPE=Release &&" \
+       "make -C $build scan2lod_bench_lod" >&2
+  exit 1
+fi
+exec "$binary" "${args[@]}"
