@@ -6,30 +6,18 @@
 #include "measure/topology.h"
 #include "reconstruct/marching_cubes.h"
 
+#include "test_shapes.h"
+
 #include <gtest/gtest.h>
 #include <open3d/geometry/TriangleMesh.h>
 
 #include <cmath>
 
 using namespace scan2lod;
+using scan2lod::testing::from_open3d;
+using scan2lod::testing::scan_shape;
 
 namespace {
-
-TriangleMesh from_open3d(const open3d::geometry::TriangleMesh& m) {
-  TriangleMesh out;
-  for (const auto& v : m.vertices_) out.positions.push_back(v.cast<float>());
-  for (const auto& t : m.triangles_) out.triangles.push_back({t[0], t[1], t[2]});
-  return out;
-}
-
-OrientedPoints scan(const TriangleMesh& mesh, int views, int size) {
-  VirtualScanOptions options;
-  options.views = views;
-  options.width = options.height = size;
-  OrientedPoints points;
-  for (const VirtualScan& s : virtual_scan(mesh, options)) points.append(range_image_to_points(s.image, s.pose));
-  return points;
-}
 
 struct ShapeResult {
   MeshTopology topology;
@@ -38,7 +26,7 @@ struct ShapeResult {
 
 template <class Distance>
 ShapeResult reconstruct_shape(const TriangleMesh& shape, int resolution, Distance analytic) {
-  OrientedPoints points = scan(shape, 14, 256);
+  OrientedPoints points = scan_shape(shape, 14, 256);
   ReconstructOptions options;
   options.resolution = resolution;
   Reconstruction r = reconstruct(points, options);
@@ -93,7 +81,7 @@ TEST(ClosedShapes, ScanColoursReachTheMeshVertices) {
   TriangleMesh mesh = from_open3d(*sphere);
   for (const Vec3f& p : mesh.positions)
     mesh.colors.push_back(p.z() > 0.f ? Rgb{230, 20, 20} : Rgb{20, 20, 230});
-  OrientedPoints points = scan(mesh, 14, 128);
+  OrientedPoints points = scan_shape(mesh, 14, 128);
   ASSERT_EQ(points.colors.size(), points.size());
   ReconstructOptions options;
   options.resolution = 32;

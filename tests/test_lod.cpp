@@ -8,6 +8,8 @@
 #include "measure/topology.h"
 #include "reconstruct/marching_cubes.h"
 
+#include "test_shapes.h"
+
 #include <gtest/gtest.h>
 #include <open3d/geometry/TriangleMesh.h>
 
@@ -15,6 +17,8 @@
 #include <map>
 
 using namespace scan2lod;
+using scan2lod::testing::from_open3d;
+using scan2lod::testing::scan_shape;
 
 namespace {
 
@@ -177,17 +181,6 @@ TEST(LodArray, AccumulationTableCountsTheExtractedTriangles) {
 
 namespace {
 
-OrientedPoints scanned(const open3d::geometry::TriangleMesh& shape) {
-  TriangleMesh mesh;
-  for (const auto& v : shape.vertices_) mesh.positions.push_back(v.cast<float>());
-  for (const auto& t : shape.triangles_) mesh.triangles.push_back({t[0], t[1], t[2]});
-  VirtualScanOptions options;
-  options.views = 14;
-  OrientedPoints points;
-  for (const VirtualScan& s : virtual_scan(mesh, options)) points.append(range_image_to_points(s.image, s.pose));
-  return points;
-}
-
 void expect_closed_at_every_level(const Model& m, long euler) {
   std::vector<std::uint8_t> scratch;
   std::vector<Triangle> tris;
@@ -204,12 +197,12 @@ void expect_closed_at_every_level(const Model& m, long euler) {
 }  // namespace
 
 TEST(CrackPatching, ScannedSphereIsClosedAtEveryLevel) {
-  const Model m = build_model(scanned(*open3d::geometry::TriangleMesh::CreateSphere(1.0, 120)), 64);
+  const Model m = build_model(scan_shape(from_open3d(*open3d::geometry::TriangleMesh::CreateSphere(1.0, 120))), 64);
   expect_closed_at_every_level(m, 2);
 }
 
 TEST(CrackPatching, ScannedTorusIsClosedAtEveryLevel) {
-  const Model m = build_model(scanned(*open3d::geometry::TriangleMesh::CreateTorus(1.0, 0.4, 200, 80)), 64);
+  const Model m = build_model(scan_shape(from_open3d(*open3d::geometry::TriangleMesh::CreateTorus(1.0, 0.4, 200, 80))), 64);
   expect_closed_at_every_level(m, 0);
 }
 

@@ -7,6 +7,8 @@
 #include <Eigen/Geometry>
 #include <open3d/geometry/TriangleMesh.h>
 
+#include "test_shapes.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,15 +16,9 @@
 #include <random>
 
 using namespace scan2lod;
+using scan2lod::testing::from_open3d;
 
 namespace {
-
-TriangleMesh from_open3d(const open3d::geometry::TriangleMesh& o) {
-  TriangleMesh m;
-  for (const auto& v : o.vertices_) m.positions.push_back(v.cast<float>());
-  for (const auto& t : o.triangles_) m.triangles.push_back({t[0], t[1], t[2]});
-  return m;
-}
 
 TriangleMesh sphere(double radius, int resolution) {
   return from_open3d(*open3d::geometry::TriangleMesh::CreateSphere(radius, resolution));
