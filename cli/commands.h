@@ -13,5 +13,6 @@ void add_convert_command(CLI::App& app);
 void add_build_command(CLI::App& app);    // lod/: scans -> .mco model
 void add_extract_command(CLI::App& app);  // .mco -> mesh at one level of detail
 void add_info_command(CLI::App& app);     // .mco -> levels and sizes
+void add_render_command(CLI::App& app);   // visualize/: .mco -> PNG montage of levels
 
 }  // namespace scan2lod::cli

@@ -1,0 +1,233 @@
+// visualize/ by its pixels: the montage and plots of the bundled bunny are
+// rendered off-screen (the tests run under xvfb-run), read back from the PNG,
+// and measured: how much of a panel the object covers, how dense the
+// wireframe's edges are, whether two renders agree to the pixel.
+#include "lod/model_file.h"
+#include "visualize/levels.h"
+#include "visualize/montage.h"
+#include "visualize/octree_cells.h"
+
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGReader.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using scan2lod::testing::CliRun;
+
+CliRun run(const std::string& args, bool merge_stderr = true) {
+  return scan2lod::testing::run_cli(args, merge_stderr);
+}
+
+fs::path scratch() {
+  const fs::path dir = scan2lod::testing::scratch_folder() / "visualize";
+  fs::create_directories(dir);
+  return dir;
+}
+
+bool have_display() {
+  const char* d = std::getenv("DISPLAY");
+  return d && *d;
+}
+
+const std::string kScans = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf";
+
+// The bunny at R = 64, built once by `scan2lod build`.
+const fs::path& bunny_model() {
+  static const fs::path path = [] {
+    const fs::path p = scratch() / "bunny64.mco";
+    const CliRun r = run("build " + kScans + " -o " + p.string() + " -r 64 -q");
+    EXPECT_EQ(r.status, 0) << r.output;
+    return p;
+  }();
+  return path;
+}
+
+// An RGB picture, rows from the top.
+struct Picture {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;
+  const std::uint8_t* at(int x, int y) const { return &rgb[3 * (std::size_t(y) * width + x)]; }
+};
+
+Picture read_png(const fs::path& path) {
+  vtkNew<vtkPNGReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkImageData* image = reader->GetOutput();
+  Picture p;
+  int dims[3];
+  image->GetDimensions(dims);
+  p.width = dims[0];
+  p.height = dims[1];
+  const int components = image->GetNumberOfScalarComponents();
+  p.rgb.resize(3 * std::size_t(p.width) * p.height);
+  for (int y = 0; y < p.height; ++y)
+    for (int x = 0; x < p.width; ++x) {
+      const auto* src = static_cast<const std::uint8_t*>(image->GetScalarPointer(x, p.height - 1 - y, 0));
+      for (int k = 0; k < 3; ++k) p.rgb[3 * (std::size_t(y) * p.width + x) + k] = src[components >= 3 ? k : 0];
+    }
+  return p;
+}
+
+// A rectangle of a picture, without the caption strip at the panel's foot.
+struct Region {
+  int x, y, width, height;
+};
+
+Region body(const scan2lod::MontagePanel& p) { return {p.x, p.y, p.width, p.height * 85 / 100}; }
+
+double fraction(const Picture& pic, const Region& r, bool (*test)(const std::uint8_t*)) {
+  std::size_t hits = 0;
+  for (int y = r.y; y < r.y + r.height; ++y)
+    for (int x = r.x; x < r.x + r.width; ++x) hits += test(pic.at(x, y));
+  return double(hits) / (double(r.width) * r.height);
+}
+
+bool not_background(const std::uint8_t* c) { return c[0] < 245 || c[1] < 245 || c[2] < 245; }
+bool dark(const std::uint8_t* c) { return c[0] < 110 && c[1] < 110 && c[2] < 110; }
+
+std::size_t differing_pixels(const Picture& pic, const Region& a, const Region& b) {
+  std::size_t n = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      const std::uint8_t *p = pic.at(a.x + x, a.y + y), *q = pic.at(b.x + x, b.y + y);
+      n += p[0] != q[0] || p[1] != q[1] || p[2] != q[2];
+    }
+  return n;
+}
+
+}  // namespace
+
+TEST(VisualizeLevels, PercentListsAreParsedStrictly) {
+  EXPECT_EQ(scan2lod::parse_percent_list("100,80,60.5", "--percent"), (std::vector<double>{100, 80, 60.5}));
+  for (const char* bad : {"", "100,,80", "abc", "101", "-1", "50x"})
+    EXPECT_THROW(scan2lod::parse_percent_list(bad, "--percent"), std::runtime_error) << bad;
+  int w = 0, h = 0;
+  scan2lod::parse_size("320x240", "--size", &w, &h);
+  EXPECT_EQ(w, 320);
+  EXPECT_EQ(h, 240);
+  for (const char* bad : {"320", "0x10", "10x", "x10", "10x10x", "99999x10"})
+    EXPECT_THROW(scan2lod::parse_size(bad, "--size", &w, &h), std::runtime_error) << bad;
+}
+
+TEST(VisualizeLevels, TheCutCoversTheSurfaceOnceAtEveryPriority) {
+  // Every leaf lies below exactly one node of the cut, whatever the priority.
+  const scan2lod::LodModel model = scan2lod::load_model(bunny_model().string());
+  const scan2lod::McOctree& t = model.tree;
+  for (std::size_t p : {std::size_t(0), std::size_t(1), model.lod.full() / 5, model.lod.full()}) {
+    const std::vector<std::int32_t> cut = scan2lod::lod_cut(t, model.lod, p);
+    std::vector<int> covered(t.size(), 0);
+    for (std::int32_t n : cut) covered[std::size_t(n)] = 1;
+    std::size_t leaves = 0;
+    for (std::size_t n = 0; n < t.size(); ++n) {
+      if (!t.is_leaf(n)) continue;
+      ++leaves;
+      int hits = 0;
+      for (std::int64_t a = std::int64_t(n); a >= 0; a = t.parents[std::size_t(a)]) hits += covered[std::size_t(a)];
+      ASSERT_EQ(hits, 1) << "leaf " << n << " at priority " << p;
+    }
+    if (p == 0) EXPECT_EQ(cut, std::vector<std::int32_t>{0});
+    if (p == model.lod.full()) EXPECT_EQ(cut.size(), leaves);
+  }
+}
+
+TEST(VisualizeRender, MontagePanelsShowTheBunnyAndItsLevels) {
+  if (!have_display()) GTEST_SKIP() << "no X display; scripts/build.sh test runs the tests under xvfb-run";
+  const fs::path out = scratch() / "montage.png";
+  const CliRun r = run("render " + bunny_model().string() + " --percent 100,20,60,60 --size 200x200 --mode both -o " +
+                       out.string() + " -q");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Picture pic = read_png(out);
+  ASSERT_EQ(pic.width, 400);
+  ASSERT_EQ(pic.height, 800);
+  auto panel = [](int row, int column) {
+    scan2lod::MontagePanel p;
+    p.x = column * 200, p.y = row * 200, p.width = 200, p.height = 200;
+    return body(p);
+  };
+  // Column 0 wireframe, column 1 shaded; rows 100, 20, 60, 60 %.
+  for (int row = 0; row < 4; ++row) {
+    const double covered = fraction(pic, panel(row, 1), not_background);
+    EXPECT_GT(covered, 0.15) << "row " << row;
+    EXPECT_LT(covered, 0.80) << "row " << row;
+    // Wireframe and shaded differ in most of the object's pixels.
+    EXPECT_GT(double(differing_pixels(pic, panel(row, 0), panel(row, 1))), 0.5 * covered * 200 * 170) << "row " << row;
+  }
+  // Edges: dark pixels per object pixel, 20 % against 100 %.
+  const double full = fraction(pic, panel(0, 0), dark) / fraction(pic, panel(0, 1), not_background);
+  const double fifth = fraction(pic, panel(1, 0), dark) / fraction(pic, panel(1, 1), not_background);
+  EXPECT_GT(full, 0.25);
+  EXPECT_LT(fifth, 0.8 * full) << "edge density 20 %: " << fifth << ", 100 %: " << full;
+  // The same level twice in one picture: the same pixels, caption included,
+  // but for a handful on shaded silhouettes (Mesa's rasteriser is not exactly
+  // translation-invariant between viewports; two runs agree exactly, below).
+  for (int column = 0; column < 2; ++column)
+    EXPECT_LE(differing_pixels(pic, {column * 200, 400, 200, 200}, {column * 200, 600, 200, 200}), 20u)
+        << "column " << column;
+  // The printed table: 4 levels with their triangle counts, 20 % well below 100 %.
+  EXPECT_NE(r.output.find("8 panels, 400x800 pixels"), std::string::npos) << r.output;
+}
+
+TEST(VisualizeRender, TwoRunsGiveTheSamePicture) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const fs::path a = scratch() / "same_a.png", b = scratch() / "same_b.png";
+  for (const fs::path& out : {a, b}) {
+    const CliRun r =
+        run("render " + bunny_model().string() + " --percent 40 --size 160x120 --mode shaded -o " + out.string());
+    ASSERT_EQ(r.status, 0) << r.output;
+  }
+  const Picture pa = read_png(a), pb = read_png(b);
+  ASSERT_EQ(pa.width, 160);
+  ASSERT_EQ(pa.height, 120);
+  EXPECT_EQ(pa.rgb, pb.rgb);
+  EXPECT_GT(fraction(pa, {0, 0, 160, 100}, not_background), 0.1);
+}
+
+TEST(VisualizeRender, SingleModePutsLevelsSideBySide) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const fs::path out = scratch() / "row.png";
+  const CliRun r = run("render " + bunny_model().string() +
+                       " --percent 100,20 --size 150x150 --mode wireframe -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Picture pic = read_png(out);
+  EXPECT_EQ(pic.width, 300);
+  EXPECT_EQ(pic.height, 150);
+  EXPECT_GT(fraction(pic, {0, 0, 150, 127}, dark), fraction(pic, {150, 0, 150, 127}, dark));
+}
+
+TEST(VisualizeRender, BadInputEndsInAClearErrorAndNoFile) {
+  const fs::path out = scratch() / "bad.png";
+  struct Case {
+    std::string args, expected;
+  };
+  const std::string model = bunny_model().string();
+  const std::vector<Case> cases = {
+      {"render " + (scratch() / "missing.mco").string() + " -o " + out.string(), "missing.mco"},
+      {"render " + kScans + " -o " + out.string(), "bun.conf"},
+      {"render " + model + " -o " + (scratch() / "bad.jpg").string(), ".png"},
+      {"render " + model + " -o " + (scratch() / "no_such_folder" / "x.png").string(), "does not exist"},
+      {"render " + model + " --percent 120 -o " + out.string(), "between 0 and 100"},
+      {"render " + model + " --size 0x100 -o " + out.string(), "WIDTHxHEIGHT"},
+      {"render " + model + " --mode flat -o " + out.string(), "shaded, wireframe or both"},
+  };
+  for (const Case& c : cases) {
+    const CliRun r = run(c.args);
+    EXPECT_NE(r.status, 0) << c.args;
+    EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << " -> " << r.output;
+    EXPECT_FALSE(fs::exists(out)) << c.args;
+  }
+}

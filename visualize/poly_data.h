@@ -1,0 +1,29 @@
+// The edge where plain meshes become VTK poly data: the viewer, the montage and
+// the plots draw through these, the pipeline never sees a VTK type.
+#pragma once
+
+#include "core/types.h"
+
+#include <vtkSmartPointer.h>
+
+class vtkPolyData;
+
+namespace scan2lod {
+
+// Triangles of `mesh` as poly data: float points, 32-bit connectivity (a
+// straight copy, no per-cell inserts), "Normals" when the mesh has them and
+// "Colors" (unsigned char RGB) always: the mesh's own vertex colours, or,
+// when it has none, its normals mapped to RGB (0.5 + 0.5 n) so that the
+// colour mode still shows something. Cost is linear in the mesh and small
+// next to extraction (the slider benchmark, bench/viewer_bench.cpp).
+vtkSmartPointer<vtkPolyData> mesh_to_poly_data(const TriangleMesh& mesh);
+
+// Oriented points as poly data: one vertex cell per point, all in `color`.
+vtkSmartPointer<vtkPolyData> points_to_poly_data(const OrientedPoints& points, const Rgb& color);
+
+// Normals as short line segments from each `stride`-th point p to p + length n,
+// all in `color` (the viewer's normal glyphs for scan sets).
+vtkSmartPointer<vtkPolyData> normals_to_poly_data(const OrientedPoints& points, float length, std::size_t stride,
+                                                  const Rgb& color);
+
+}  // namespace scan2lod
