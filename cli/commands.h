@@ -14,5 +14,6 @@ void add_build_command(CLI::App& app);    // lod/: scans -> .mco model
 void add_extract_command(CLI::App& app);  // .mco -> mesh at one level of detail
 void add_info_command(CLI::App& app);     // .mco -> levels and sizes
 void add_render_command(CLI::App& app);   // visualize/: .mco -> PNG montage of levels
+void add_plot_command(CLI::App& app);     // visualize/: .mco -> LOD graphs (PNG)
 
 }  // namespace scan2lod::cli

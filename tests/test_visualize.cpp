@@ -6,6 +6,7 @@
 #include "visualize/levels.h"
 #include "visualize/montage.h"
 #include "visualize/octree_cells.h"
+#include "visualize/plots.h"
 
 #include "test_support.h"
 
@@ -18,6 +19,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -227,6 +229,116 @@ TEST(VisualizeRender, BadInputEndsInAClearErrorAndNoFile) {
     const CliRun r = run(c.args);
     EXPECT_NE(r.status, 0) << c.args;
     EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << " -> " << r.output;
+    EXPECT_FALSE(fs::exists(out)) << c.args;
+  }
+}
+
+namespace {
+
+bool near(const std::uint8_t* c, const std::uint8_t* want) {
+  return std::abs(int(c[0]) - want[0]) < 40 && std::abs(int(c[1]) - want[1]) < 40 && std::abs(int(c[2]) - want[2]) < 40;
+}
+
+// A curve in `colour` inside a chart: how many pixels, and over how many
+// columns and rows of the chart they spread.
+struct Curve {
+  std::size_t pixels = 0, columns = 0, rows = 0;
+};
+
+Curve curve_in(const Picture& pic, const Region& r, const std::uint8_t* colour) {
+  Curve c;
+  std::vector<char> cols(std::size_t(r.width), 0), rows(std::size_t(r.height), 0);
+  for (int y = 0; y < r.height; ++y)
+    for (int x = 0; x < r.width; ++x)
+      if (near(pic.at(r.x + x, r.y + y), colour)) ++c.pixels, cols[std::size_t(x)] = 1, rows[std::size_t(y)] = 1;
+  for (char v : cols) c.columns += std::size_t(v);
+  for (char v : rows) c.rows += std::size_t(v);
+  return c;
+}
+
+}  // namespace
+
+TEST(VisualizePlot, TheThreeLodGraphsHoldCurves) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const fs::path out = scratch() / "plots.png";
+  const CliRun r = run("plot " + bunny_model().string() + " --size 400x300 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("3 charts"), std::string::npos) << r.output;
+  const Picture pic = read_png(out);
+  ASSERT_EQ(pic.width, 1200);
+  ASSERT_EQ(pic.height, 300);
+  for (int chart = 0; chart < 3; ++chart) {
+    const Curve c = curve_in(pic, {chart * 400, 0, 400, 300}, scan2lod::kPlotBlue);
+    // A curve across most of the plot area (about 300 of the 400 columns),
+    // not a flat line: the metric falls, the accumulation rises.
+    EXPECT_GT(c.columns, 200u) << "chart " << chart;
+    EXPECT_GT(c.rows, 25u) << "chart " << chart;
+    EXPECT_GT(c.pixels, 300u) << "chart " << chart;
+  }
+  // The accumulation's curve climbs: its leftmost blue pixels sit lower in the
+  // picture than its rightmost ones.
+  const Region acc{800, 0, 400, 300};
+  int left_y = -1, right_y = -1;
+  for (int x = 0; x < acc.width && left_y < 0; ++x)
+    for (int y = acc.height - 1; y >= 0; --y)
+      if (near(pic.at(acc.x + x, y), scan2lod::kPlotBlue)) { left_y = y; break; }
+  for (int x = acc.width - 1; x >= 0 && right_y < 0; --x)
+    for (int y = 0; y < acc.height; ++y)
+      if (near(pic.at(acc.x + x, y), scan2lod::kPlotBlue)) { right_y = y; break; }
+  ASSERT_GE(left_y, 0);
+  ASSERT_GE(right_y, 0);
+  EXPECT_GT(left_y - right_y, 100);
+}
+
+TEST(VisualizePlot, ErrorAgainstTrianglesFallsToZeroAtFullDetail) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  // The reference is the model's own full-detail mesh: its error is zero at
+  // 100 % and positive below.
+  const fs::path reference = scratch() / "full_reference.ply";
+  ASSERT_EQ(run("extract " + bunny_model().string() + " --percent 100 -o " + reference.string()).status, 0);
+  const fs::path out = scratch() / "plots_error.png";
+  const CliRun r = run("plot " + bunny_model().string() + " --reference " + reference.string() +
+                           " --percent 2,10,40,100 --samples 4000 --size 300x250 -o " + out.string(),
+                       false);
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::istringstream lines(r.output);
+  std::string header, line;
+  std::getline(lines, header);
+  std::vector<double> to_ref;
+  for (int i = 0; i < 4 && std::getline(lines, line); ++i) {
+    std::istringstream row(line);
+    double percent, priority, triangles, a, b;
+    ASSERT_TRUE(bool(row >> percent >> priority >> triangles >> a >> b)) << line;
+    to_ref.push_back(a + b);
+  }
+  ASSERT_EQ(to_ref.size(), 4u) << r.output;
+  EXPECT_GT(to_ref[0], to_ref[2]);
+  EXPECT_GT(to_ref[2], 0.0);
+  EXPECT_LT(to_ref[3], 1e-3);
+  const Picture pic = read_png(out);
+  ASSERT_EQ(pic.width, 600);
+  ASSERT_EQ(pic.height, 500);
+  const Region error_chart{300, 250, 300, 250};
+  EXPECT_GT(curve_in(pic, error_chart, scan2lod::kPlotBlue).columns, 100u);
+  EXPECT_GT(curve_in(pic, error_chart, scan2lod::kPlotRed).columns, 100u);
+}
+
+TEST(VisualizePlot, BadInputEndsInAClearErrorAndNoFile) {
+  const fs::path out = scratch() / "bad_plot.png";
+  const std::string model = bunny_model().string();
+  struct Case {
+    std::string args, expected;
+  };
+  const std::vector<Case> cases = {
+      {"plot " + (scratch() / "missing.mco").string() + " -o " + out.string(), "missing.mco"},
+      {"plot " + model + " -o " + (scratch() / "plot.svg").string(), ".png"},
+      {"plot " + model + " --reference " + (scratch() / "nope.ply").string() + " -o " + out.string(), "nope.ply"},
+      {"plot " + model + " --size 10 -o " + out.string(), "WIDTHxHEIGHT"},
+  };
+  for (const Case& c : cases) {
+    const CliRun r = run(c.args);
+    EXPECT_NE(r.status, 0) << c.args;
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << " -> " << r.output;
     EXPECT_FALSE(fs::exists(out)) << c.args;
   }

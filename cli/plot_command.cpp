@@ -1,0 +1,55 @@
+// scan2lod plot: the LOD graphs of a .mco model (seed 003 Figs. 6.6-6.8) as
+// VTK charts in one PNG, plus error against triangles given a reference mesh.
+#include "cli/commands.h"
+#include "io/mesh_file.h"
+#include "lod/model_file.h"
+#include "visualize/levels.h"
+#include "visualize/montage.h"
+#include "visualize/plots.h"
+#include "visualize/png_output.h"
+
+#include <cstdio>
+#include <memory>
+
+namespace scan2lod::cli {
+
+void add_plot_command(CLI::App& app) {
+  struct Args {
+    std::string model, output, reference, percents = "1,2,5,10,20,30,40,50,60,70,80,90,100", size = "520x400";
+    std::size_t samples = 20000;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* cmd = app.add_subcommand("plot", "LOD metric and accumulation graphs of a .mco model -> PNG");
+  cmd->add_option("model", args->model, "Model written by scan2lod build (.mco)")->required();
+  cmd->add_option("-o,--output", args->output, "Output picture (.png)")->required();
+  cmd->add_option("--reference", args->reference, "Mesh to measure each level against (adds error vs triangles)");
+  cmd->add_option("--percent", args->percents, "Levels measured against --reference, comma-separated")
+      ->capture_default_str();
+  cmd->add_option("--samples", args->samples, "Surface samples per direction and level for --reference")
+      ->capture_default_str();
+  cmd->add_option("--size", args->size, "Pixels per chart, WIDTHxHEIGHT")->capture_default_str();
+  cmd->callback([args] {
+    PlotOptions options;
+    parse_size(args->size, "--size", &options.chart_width, &options.chart_height);
+    const std::vector<double> percents = parse_percent_list(args->percents, "--percent");
+    check_png_output(args->output);
+    require_display("plot");
+
+    const LodModel model = load_model(args->model);
+    std::vector<LevelError> errors;
+    if (!args->reference.empty()) {
+      const TriangleMesh reference = read_mesh(args->reference);
+      errors = level_errors(model, reference, percents, args->samples);
+      std::printf("%6s %10s %10s %12s %12s\n", "LOD %", "priority", "triangles", "to ref %", "from ref %");
+      for (const LevelError& e : errors)
+        std::printf("%6g %10zu %10zu %12.4f %12.4f\n", e.percent, e.priority, e.triangles, e.mean_to_reference,
+                    e.mean_from_reference);
+    }
+    const PlotPicture p = write_lod_plots(model, errors, options, args->output);
+    std::printf("%zu charts (%zu priorities, %lld triangles at full detail), %dx%d pixels -> %s\n", p.charts.size(),
+                model.lod.full(), model.lod.accumulated.empty() ? 0LL : (long long)model.lod.accumulated.back(),
+                p.width, p.height, args->output.c_str());
+  });
+}
+
+}  // namespace scan2lod::cli

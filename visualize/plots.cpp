@@ -1,0 +1,170 @@
+#include "visualize/plots.h"
+
+#include "core/error.h"
+#include "core/progress.h"
+#include "measure/surface_distance.h"
+#include "visualize/levels.h"
+#include "visualize/png_output.h"
+
+#include <vtkAxis.h>
+#include <vtkChartMatrix.h>
+#include <vtkChartXY.h>
+#include <vtkContextScene.h>
+#include <vtkContextView.h>
+#include <vtkDoubleArray.h>
+#include <vtkNew.h>
+#include <vtkPen.h>
+#include <vtkPlot.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkTable.h>
+#include <vtkTextProperty.h>
+#include <vtkVector.h>
+
+#include <algorithm>
+
+namespace scan2lod {
+namespace {
+
+vtkSmartPointer<vtkDoubleArray> column(const char* name, const std::vector<double>& values) {
+  auto a = vtkSmartPointer<vtkDoubleArray>::New();
+  a->SetName(name);
+  a->SetNumberOfTuples(vtkIdType(values.size()));
+  std::copy(values.begin(), values.end(), a->GetPointer(0));
+  return a;
+}
+
+void add_line(vtkChartXY* chart, vtkTable* table, int y_column, const std::uint8_t rgb[3], float width,
+              bool points = false) {
+  vtkPlot* line = chart->AddPlot(points ? vtkChart::POINTS : vtkChart::LINE);
+  line->SetInputData(table, 0, y_column);
+  line->SetColor(rgb[0], rgb[1], rgb[2], 255);
+  line->SetWidth(width);
+}
+
+void label(vtkChartXY* chart, const std::string& title, const char* x, const char* y) {
+  chart->SetTitle(title);
+  chart->GetTitleProperties()->SetFontSize(15);
+  chart->GetTitleProperties()->BoldOn();
+  chart->GetAxis(vtkAxis::BOTTOM)->SetTitle(x);
+  chart->GetAxis(vtkAxis::LEFT)->SetTitle(y);
+  for (int a : {vtkAxis::BOTTOM, vtkAxis::LEFT}) {
+    chart->GetAxis(a)->GetTitleProperties()->SetFontSize(13);
+    chart->GetAxis(a)->GetLabelProperties()->SetFontSize(11);
+  }
+}
+
+}  // namespace
+
+std::vector<LevelError> level_errors(const LodModel& model, const TriangleMesh& reference,
+                                     const std::vector<double>& percents, std::size_t samples) {
+  std::vector<LevelError> out;
+  LevelSource source(model);
+  Progress progress("error", percents.size());
+  CompareOptions compare;
+  compare.samples = samples;
+  for (double percent : percents) {
+    const Level level = source.at_percent(percent);
+    const SurfaceComparison c = compare_surfaces(level.mesh, reference, compare);
+    LevelError e;
+    e.percent = percent;
+    e.priority = level.priority;
+    e.triangles = level.mesh.triangles.size();
+    const double unit = c.diagonal > 0 ? 100.0 / c.diagonal : 0.0;
+    e.mean_to_reference = c.a_to_b.mean * unit;
+    e.mean_from_reference = c.b_to_a.mean * unit;
+    out.push_back(e);
+    progress.advance();
+  }
+  progress.finish();
+  return out;
+}
+
+PlotPicture write_lod_plots(const LodModel& model, const std::vector<LevelError>& errors, const PlotOptions& options,
+                            const std::string& path) {
+  require_display("plot");
+  const LodArray& lod = model.lod;
+  const int columns = errors.empty() ? 3 : 2, rows = errors.empty() ? 1 : 2;
+  PlotPicture picture;
+  picture.width = columns * options.chart_width;
+  picture.height = rows * options.chart_height;
+
+  vtkNew<vtkContextView> view;
+  view->GetRenderWindow()->SetOffScreenRendering(1);
+  view->GetRenderWindow()->SetMultiSamples(0);
+  view->GetRenderWindow()->SetSize(picture.width, picture.height);
+  view->GetRenderer()->SetBackground(1, 1, 1);
+  vtkNew<vtkChartMatrix> matrix;
+  matrix->SetSize(vtkVector2i(columns, rows));
+  matrix->SetGutter(vtkVector2f(70.f, 70.f));
+  matrix->SetBorders(70, 60, 30, 40);
+  view->GetScene()->AddItem(matrix);
+  // Chart matrix indices count from the bottom-left; pictures from the top.
+  auto chart_at = [&](int i, const std::string& title) {
+    const int col = i % columns, row = i / columns;
+    picture.charts.push_back({title, col * options.chart_width, row * options.chart_height, options.chart_width,
+                              options.chart_height});
+    auto* chart = vtkChartXY::SafeDownCast(matrix->GetChart(vtkVector2i(col, rows - 1 - row)));
+    return chart;
+  };
+
+  // Fig. 6.6: the metric of the node each priority number expands.
+  std::vector<double> priority, metric;
+  for (std::size_t i = 0; i < lod.full(); ++i) {
+    priority.push_back(double(i));
+    metric.push_back(double(model.tree.metrics[std::size_t(lod.order[i])]));
+  }
+  vtkNew<vtkTable> metrics;
+  metrics->AddColumn(column("priority", priority));
+  metrics->AddColumn(column("LOD metric", metric));
+  vtkChartXY* a = chart_at(0, "LOD metric (Fig. 6.6)");
+  label(a, "LOD metric (Fig. 6.6)", "priority number", "LOD metric (area)");
+  add_line(a, metrics, 1, kPlotBlue, 1.f);
+
+  // Fig. 6.7: its first priorities, where the order matters most.
+  const std::size_t part = std::min(options.part, lod.full());
+  vtkNew<vtkTable> head;
+  head->AddColumn(column("priority", std::vector<double>(priority.begin(), priority.begin() + long(part))));
+  head->AddColumn(column("LOD metric", std::vector<double>(metric.begin(), metric.begin() + long(part))));
+  const std::string part_title = "LOD metric, first " + std::to_string(part) + " (Fig. 6.7)";
+  vtkChartXY* b = chart_at(1, part_title);
+  label(b, part_title, "priority number", "LOD metric (area)");
+  add_line(b, head, 1, kPlotBlue, 1.5f);
+
+  // Fig. 6.8: triangles after each number of expansions.
+  std::vector<double> steps, triangles;
+  for (std::size_t i = 0; i < lod.accumulated.size(); ++i) {
+    steps.push_back(double(i));
+    triangles.push_back(double(lod.accumulated[i]));
+  }
+  vtkNew<vtkTable> accumulation;
+  accumulation->AddColumn(column("priority", steps));
+  accumulation->AddColumn(column("triangles", triangles));
+  vtkChartXY* c = chart_at(2, "Accumulated triangles (Fig. 6.8)");
+  label(c, "Accumulated triangles (Fig. 6.8)", "priority number", "triangles");
+  add_line(c, accumulation, 1, kPlotBlue, 2.f);
+
+  vtkNew<vtkTable> error_table;
+  if (!errors.empty()) {
+    std::vector<double> tris, to_ref, from_ref;
+    for (const LevelError& e : errors) {
+      tris.push_back(double(std::max<std::size_t>(e.triangles, 1)));
+      to_ref.push_back(e.mean_to_reference);
+      from_ref.push_back(e.mean_from_reference);
+    }
+    error_table->AddColumn(column("triangles", tris));
+    error_table->AddColumn(column("mean, level to reference", to_ref));
+    error_table->AddColumn(column("mean, reference to level", from_ref));
+    vtkChartXY* d = chart_at(3, "Error against triangles");
+    label(d, "Error against triangles", "triangles", "mean distance (% of diagonal)");
+    d->GetAxis(vtkAxis::BOTTOM)->SetLogScale(true);
+    add_line(d, error_table, 1, kPlotBlue, 2.f);
+    add_line(d, error_table, 2, kPlotRed, 2.f);
+    d->SetShowLegend(true);
+  }
+
+  write_window_png(view->GetRenderWindow(), path);
+  return picture;
+}
+
+}  // namespace scan2lod
