@@ -31,14 +31,17 @@
 // finest cells are 1.1 * extent / 2^d against scan2lod's extent / (R - 8),
 // within 7% of each other.
 //
-// Children get the work by fork() without exec, so the parent must never run
-// OpenMP itself before the last child is done: libgomp's thread pool does not
-// survive fork. The parent therefore loads the points in a child too and only
-// measures (Open3D, OpenMP) after every timed case has finished.
+// Children get the work by fork() without exec (bench/bench_support.h), so the
+// parent must never run OpenMP itself before the last child is done: libgomp's
+// thread pool does not survive fork. The parent therefore loads the points in
+// a child too and only measures (Open3D, OpenMP) after every timed case has
+// finished.
 //
 // Output: a markdown report on stdout; progress on stderr.
 
 #include "acquisition/load_inputs.h"
+#include "bench/bench_support.h"
+#include "bench/library_meshes.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/types.h"
@@ -55,93 +58,34 @@
 #include <pcl/point_types.h>
 #include <pcl/surface/marching_cubes_hoppe.h>
 #include <pcl/surface/poisson.h>
-#include <vtkCellArray.h>
 #include <vtkContourFilter.h>
-#include <vtkIdList.h>
 #include <vtkNew.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkSurfaceReconstructionFilter.h>
 
-#include <signal.h>
-#include <sys/resource.h>
-#include <sys/utsname.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cassert>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <string>
-#include <thread>
 #include <tuple>
-#include <type_traits>
 #include <unordered_map>
 #include <vector>
 
 namespace fs = std::filesystem;
 using namespace scan2lod;
+using namespace scan2lod::bench;
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-// ---------------------------------------------------------------------------
-// Plain binary dumps for handing points and meshes between processes.
-
-// T is plain numbers: float/int arrays or Eigen's fixed-size vectors, which
-// hold just their coefficients but do not count as trivially copyable.
-template <typename T>
-void write_array(std::ofstream& out, const std::vector<T>& v) {
-  static_assert(std::is_standard_layout_v<T>);
-  const std::uint64_t n = v.size();
-  out.write(reinterpret_cast<const char*>(&n), sizeof n);
-  out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(n * sizeof(T)));
-}
-
-template <typename T>
-void read_array(std::ifstream& in, std::vector<T>* v) {
-  std::uint64_t n = 0;
-  in.read(reinterpret_cast<char*>(&n), sizeof n);
-  v->resize(n);
-  in.read(reinterpret_cast<char*>(v->data()), std::streamsize(n * sizeof(T)));
-}
-
-void dump_points(const std::string& path, const OrientedPoints& p) {
-  std::ofstream out(path, std::ios::binary);
-  write_array(out, p.positions);
-  write_array(out, p.normals);
-  write_array(out, p.colors);
-  write_array(out, p.confidence);
-  write_array(out, p.spacing);
-  if (!out) throw InputError(path, "could not write the points dump");
-}
-
-OrientedPoints undump_points(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  OrientedPoints p;
-  read_array(in, &p.positions);
-  read_array(in, &p.normals);
-  read_array(in, &p.colors);
-  read_array(in, &p.confidence);
-  read_array(in, &p.spacing);
-  if (!in) throw InputError(path, "truncated points dump");
-  return p;
-}
 
 // A case's output: positions and triangles (normals and colours do not enter
 // any measure) and scan2lod's counters (left default by the peers).
@@ -149,98 +93,17 @@ static_assert(std::is_trivially_copyable_v<ReconstructStats>);
 
 void dump_case(const std::string& path, const TriangleMesh& m, const ReconstructStats& stats) {
   std::ofstream out(path, std::ios::binary);
-  write_array(out, m.positions);
-  write_array(out, m.triangles);
+  write_mesh_arrays(out, m);
   out.write(reinterpret_cast<const char*>(&stats), sizeof stats);
   if (!out) throw InputError(path, "could not write the mesh dump");
 }
 
 TriangleMesh undump_case(const std::string& path, ReconstructStats* stats) {
   std::ifstream in(path, std::ios::binary);
-  TriangleMesh m;
-  read_array(in, &m.positions);
-  read_array(in, &m.triangles);
+  TriangleMesh m = read_mesh_arrays(in);
   in.read(reinterpret_cast<char*>(stats), sizeof *stats);
   if (!in) throw InputError(path, "truncated mesh dump");
   return m;
-}
-
-// ---------------------------------------------------------------------------
-// One case in a forked child.
-
-struct Outcome {
-  enum Status { ok, failed, timed_out, crashed } status = failed;
-  double seconds = 0;    // as timed by the child
-  double peak_mib = 0;   // ru_maxrss of the child, also for killed children
-  std::string message;   // why it failed
-};
-
-// Fixed size and below PIPE_BUF, so one write() and no blocking before the read.
-struct ChildMessage {
-  double seconds = 0;
-  int ok = 0;
-  char error[1024] = {};
-};
-
-// Runs `work` (which returns its own timed seconds) in a child; kills it after
-// `timeout` seconds if timeout > 0.
-Outcome run_in_child(const std::function<double()>& work, double timeout) {
-  std::fflush(stdout);
-  std::fflush(stderr);
-  int fds[2];
-  if (pipe(fds) != 0) throw std::runtime_error("pipe() failed");
-  const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error("fork() failed");
-  if (pid == 0) {
-    close(fds[0]);
-    ChildMessage msg;
-    try {
-      msg.seconds = work();
-      msg.ok = 1;
-    } catch (const std::exception& e) {
-      std::snprintf(msg.error, sizeof msg.error, "%s", e.what());
-    }
-    [[maybe_unused]] const ssize_t written = write(fds[1], &msg, sizeof msg);
-    _exit(0);  // no atexit handlers or static destructors of the parent's state
-  }
-  close(fds[1]);
-
-  const auto start = std::chrono::steady_clock::now();
-  int status = 0;
-  rusage usage{};
-  bool killed = false;
-  for (;;) {
-    const pid_t done = wait4(pid, &status, killed ? 0 : WNOHANG, &usage);
-    if (done == pid) break;
-    if (done < 0 && errno != EINTR) throw std::runtime_error("wait4() failed");
-    if (!killed && timeout > 0 && seconds_since(start) > timeout) {
-      kill(pid, SIGKILL);
-      killed = true;
-      continue;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-
-  Outcome out;
-  out.peak_mib = double(usage.ru_maxrss) / 1024.0;  // KiB on Linux
-  ChildMessage msg;
-  const ssize_t got = read(fds[0], &msg, sizeof msg);
-  close(fds[0]);
-  if (killed) {
-    out.status = Outcome::timed_out;
-    out.seconds = timeout;
-    out.message = "killed at the " + std::to_string(int(timeout)) + " s timeout";
-  } else if (WIFSIGNALED(status)) {
-    out.status = Outcome::crashed;
-    out.message = std::string("crashed: ") + strsignal(WTERMSIG(status));
-  } else if (got != ssize_t(sizeof msg) || !msg.ok) {
-    out.status = Outcome::failed;
-    out.message = got == ssize_t(sizeof msg) ? msg.error : "exited without a result";
-  } else {
-    out.status = Outcome::ok;
-    out.seconds = msg.seconds;
-  }
-  return out;
 }
 
 // ---------------------------------------------------------------------------
@@ -300,13 +163,6 @@ class PclHoppeOnGrid : public pcl::MarchingCubesHoppe<pcl::PointNormal> {
   CubeGrid grid_;
 };
 
-double median(std::vector<double> v) {
-  assert(!v.empty());
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 // scan2lod leaves a corner undefined when its closest point is farther than
 // max_distance * max(cube size, that point's sample spacing). PCL has one
 // global threshold, compared against the squared distance: use the same rule
@@ -334,7 +190,7 @@ TriangleMesh run_pcl_hoppe(const OrientedPoints& points, const CubeGrid& grid,
 
   pcl::PointCloud<pcl::PointNormal> vertices;
   std::vector<pcl::Vertices> polygons;
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   mc.reconstruct(vertices, polygons);
   *seconds = seconds_since(start);
   return from_pcl(vertices, polygons);
@@ -351,7 +207,7 @@ TriangleMesh run_pcl_poisson(const OrientedPoints& points, int depth, double* se
 
   pcl::PointCloud<pcl::PointNormal> vertices;
   std::vector<pcl::Vertices> polygons;
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   poisson.reconstruct(vertices, polygons);
   *seconds = seconds_since(start);
   return from_pcl(vertices, polygons);
@@ -373,7 +229,7 @@ TriangleMesh run_open3d_poisson(const OrientedPoints& points, int depth, double 
     cloud.normals_.push_back(points.normals[i].cast<double>());
   }
 
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   auto [mesh, density] = open3d::geometry::TriangleMesh::CreateFromPointCloudPoisson(
       cloud, std::size_t(depth));
   if (trim > 0 && !density.empty()) {
@@ -385,13 +241,7 @@ TriangleMesh run_open3d_poisson(const OrientedPoints& points, int depth, double 
     mesh->RemoveVerticesByMask(low);
   }
   *seconds = seconds_since(start);
-
-  TriangleMesh out;
-  out.positions.reserve(mesh->vertices_.size());
-  for (const Eigen::Vector3d& v : mesh->vertices_) out.positions.push_back(v.cast<float>());
-  out.triangles.reserve(mesh->triangles_.size());
-  for (const Eigen::Vector3i& t : mesh->triangles_) out.triangles.push_back({t[0], t[1], t[2]});
-  return out;
+  return from_open3d(*mesh);
 }
 
 // The spacing that gives VTK's grid `samples` samples along the points' longest
@@ -421,29 +271,10 @@ TriangleMesh run_vtk(const OrientedPoints& points, double spacing, double* secon
   vtkNew<vtkContourFilter> contour;
   contour->SetInputConnection(distance->GetOutputPort());
   contour->SetValue(0, 0.0);
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   contour->Update();
   *seconds = seconds_since(start);
-
-  vtkPolyData* surface = contour->GetOutput();
-  TriangleMesh out;
-  out.positions.resize(std::size_t(surface->GetNumberOfPoints()));
-  for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i) {
-    double p[3];
-    surface->GetPoint(i, p);
-    out.positions[std::size_t(i)] = Vec3d(p[0], p[1], p[2]).cast<float>();
-  }
-  vtkCellArray* polys = surface->GetPolys();
-  out.triangles.reserve(std::size_t(polys->GetNumberOfCells()));
-  vtkNew<vtkIdList> cell;
-  for (polys->InitTraversal(); polys->GetNextCell(cell);) {
-    if (cell->GetNumberOfIds() != 3)
-      throw std::runtime_error("vtkContourFilter returned a polygon with " +
-                               std::to_string(cell->GetNumberOfIds()) + " corners");
-    out.triangles.push_back({std::int32_t(cell->GetId(0)), std::int32_t(cell->GetId(1)),
-                             std::int32_t(cell->GetId(2))});
-  }
-  return out;
+  return from_vtk(contour->GetOutput());
 }
 
 // ---------------------------------------------------------------------------
@@ -572,22 +403,9 @@ struct Case {
   std::string measure_error;
 
   std::string name() const { return method + " " + setting; }
-  bool all_ok() const {
-    if (runs.empty()) return false;
-    for (const Outcome& o : runs)
-      if (o.status != Outcome::ok) return false;
-    return true;
-  }
-  double seconds() const {
-    std::vector<double> s;
-    for (const Outcome& o : runs) s.push_back(o.seconds);
-    return median(s);
-  }
-  double peak_mib() const {
-    double m = 0;
-    for (const Outcome& o : runs) m = std::max(m, o.peak_mib);
-    return m;
-  }
+  bool all_ok() const { return bench::all_ok(runs); }
+  double seconds() const { return median_seconds(runs); }
+  double peak_mib() const { return bench::peak_mib(runs); }
   // Mean of the two directions' mean distances, % of the reference diagonal.
   std::optional<double> two_sided_mean() const {
     if (!fidelity) return std::nullopt;
@@ -595,31 +413,28 @@ struct Case {
   }
 };
 
-std::string fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
-
 // Runs the case once, and `runs` times in all if the first run took under
 // `repeat_under` seconds; each run in its own child, killed after `timeout`
 // seconds (0: never). The first run's output is dumped for measuring.
+// A run killed at the timeout keeps the timeout as its seconds: a lower bound.
 void run_case(Case& c, int runs, double repeat_under, double timeout) {
   std::fprintf(stderr, "%s\n", c.name().c_str());
-  for (int run = 0; run < runs; ++run) {
-    if (run == 1 && !(c.runs[0].status == Outcome::ok && c.runs[0].seconds < repeat_under)) break;
-    const Outcome o = run_in_child([&] {
-      double seconds = 0;
-      ReconstructStats stats;
-      const TriangleMesh mesh = c.work(&seconds, &stats);
-      if (run == 0) dump_case(c.mesh_path, mesh, stats);
-      return seconds;
-    }, timeout);
-    c.runs.push_back(o);
-    std::fprintf(stderr, "  run %-3d %s, peak %.0f MiB\n", run + 1,
-                 o.status == Outcome::ok ? (fixed(o.seconds, 2) + " s").c_str() : o.message.c_str(),
-                 o.peak_mib);
-  }
+  c.runs = run_repeated(
+      [&](int run) {
+        double seconds = 0;
+        ReconstructStats stats;
+        const TriangleMesh mesh = c.work(&seconds, &stats);
+        if (run == 0) dump_case(c.mesh_path, mesh, stats);
+        return Values{seconds};
+      },
+      runs, repeat_under, timeout,
+      [](int run, const Outcome& o) {
+        std::fprintf(stderr, "  run %-3d %s, peak %.0f MiB\n", run + 1,
+                     o.status == Outcome::ok ? (fixed(o.values[0], 2) + " s").c_str() : o.message.c_str(),
+                     o.peak_mib);
+      });
+  for (Outcome& o : c.runs)
+    if (o.status == Outcome::timed_out) o.values[0] = timeout;
 }
 
 // The scan2lod reconstruct() case at resolution R, or nullptr.
@@ -634,46 +449,9 @@ const Case* ours_at(const std::vector<Case>& cases, int resolution) {
 std::optional<double> time_ratio(const std::vector<Case>& cases, const Case& peer) {
   const Case* ours = ours_at(cases, peer.resolution);
   if (!ours || !ours->all_ok() || peer.runs.empty()) return std::nullopt;
-  if (peer.runs[0].status == Outcome::timed_out) return peer.runs[0].seconds / ours->seconds();
+  if (peer.runs[0].status == Outcome::timed_out) return peer.runs[0].values[0] / ours->seconds();
   if (!peer.all_ok()) return std::nullopt;
   return peer.seconds() / ours->seconds();
-}
-
-// The source tree's commit, and whether it had uncommitted changes, at run
-// time (the binary may be older: run.sh builds nothing); "" without git.
-std::string source_revision() {
-  const auto run = [](const std::string& command) {
-    std::string out;
-    if (FILE* f = popen(command.c_str(), "r")) {
-      char buf[256];
-      while (std::fgets(buf, sizeof buf, f)) out += buf;
-      pclose(f);
-    }
-    return out;
-  };
-  const std::string git = "git -C '" + std::string(SCAN2LOD_SOURCE_DIR) + "' ";
-  std::string head = run(git + "rev-parse --short HEAD 2>/dev/null");
-  if (head.empty()) return {};
-  head.pop_back();  // newline
-  const bool dirty = !run(git + "status --porcelain --untracked-files=no 2>/dev/null").empty();
-  return head + (dirty ? " with uncommitted changes" : "");
-}
-
-// "1-min 5-min 15-min" load averages from /proc/loadavg.
-std::string load_average() {
-  std::ifstream in("/proc/loadavg");
-  std::string one, five, fifteen;
-  in >> one >> five >> fifteen;
-  return one + " " + five + " " + fifteen;
-}
-
-std::string cpu_model() {
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpuinfo, line))
-    if (line.rfind("model name", 0) == 0 && line.find(':') != std::string::npos)
-      return line.substr(line.find(':') + 2);
-  return {};
 }
 
 // ---------------------------------------------------------------------------
@@ -704,8 +482,8 @@ std::string time_cell(const Case& c) {
     if (o.status != Outcome::ok) return o.message;
   std::string cell = fixed(c.seconds(), 2);
   if (c.runs.size() > 1) {  // the spread shows how noisy the machine was
-    double lo = c.runs[0].seconds, hi = lo;
-    for (const Outcome& o : c.runs) lo = std::min(lo, o.seconds), hi = std::max(hi, o.seconds);
+    double lo = c.runs[0].values[0], hi = lo;
+    for (const Outcome& o : c.runs) lo = std::min(lo, o.values[0]), hi = std::max(hi, o.values[0]);
     cell += " (" + fixed(lo, 2) + "–" + fixed(hi, 2) + ", " + std::to_string(c.runs.size()) + " runs)";
   } else {
     cell += " (1 run)";
@@ -938,23 +716,11 @@ void print_notes(const std::vector<Case>& cases, const Settings& s, const RunInf
 }
 
 void print_report(const std::vector<Case>& cases, const Settings& s, const RunInfo& info) {
-  utsname u{};
-  uname(&u);
-  char date[64];
-  const std::time_t now = std::time(nullptr);
-  std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
-  const std::string cpu = cpu_model();
-
   std::printf("# Reconstruction benchmark: scan2lod against PCL, Open3D and VTK\n\n");
-  std::printf("%s · %s · nproc %ld%s%s · load average at start %s, after the timed cases %s\n\n",
-              date, u.machine, sysconf(_SC_NPROCESSORS_ONLN), cpu.empty() ? "" : " · ",
-              cpu.c_str(), info.load_at_start.c_str(), info.load_at_end.c_str());
+  std::printf("%s\n\n", run_header_line(info.load_at_start, info.load_at_end).c_str());
   std::printf("Command: `%s`  \n", info.command_line.c_str());
   // bench/run.sh makes it passive: see there why.
-  if (const char* wait_policy = std::getenv("OMP_WAIT_POLICY"))
-    std::printf("OpenMP: `OMP_WAIT_POLICY=%s`  \n", wait_policy);
-  else
-    std::printf("OpenMP: `OMP_WAIT_POLICY` unset (libgomp's default: spin, then sleep)  \n");
+  std::printf("%s", openmp_line().c_str());
   const std::string revision = source_revision();
   if (!revision.empty()) std::printf("Source: %s (at run time)  \n", revision.c_str());
   std::printf("Input: `%s` (%zu oriented points)  \n", s.input.c_str(), info.points);
@@ -971,15 +737,6 @@ void print_report(const std::vector<Case>& cases, const Settings& s, const RunIn
   print_summary(cases);
 }
 
-// The first of `candidates` (relative to the source tree) that exists, or "".
-std::string default_path(std::initializer_list<const char*> candidates) {
-  for (const char* c : candidates) {
-    const fs::path p = fs::path(SCAN2LOD_SOURCE_DIR) / c;
-    if (fs::exists(p)) return fs::weakly_canonical(p).string();
-  }
-  return {};
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -987,7 +744,7 @@ int main(int argc, char** argv) {
                "points; prints a markdown report"};
   Settings s;
   // The repository's own bunny if it ships one, else the shared copy beside the checkout.
-  s.input = default_path({"data/bunny/bun.conf", "../shared/data/bunny/data/bun.conf"});
+  s.input = default_input();
   s.reference = default_path({"../shared/data/bunny/reconstruction/bun_zipper.ply"});
   app.add_option("--input", s.input, "Scans to reconstruct (.conf, range-grid PLYs, ...)");
   app.add_option("--reference", s.reference, "Surface to measure fidelity against; empty: none");
@@ -1030,41 +787,28 @@ int main(int argc, char** argv) {
   RunInfo info;
   // Other jobs on the machine show up here and in the spread of the runs.
   info.load_at_start = load_average();
-  info.command_line = "scan2lod_bench_reconstruct";
-  for (int i = 1; i < argc; ++i) info.command_line += std::string(" ") + argv[i];
+  info.command_line = command_line("scan2lod_bench_reconstruct", argc, argv);
 
-  char dir_template[] = "/tmp/scan2lod_reconstruct_bench.XXXXXX";
-  if (!mkdtemp(dir_template)) {
-    std::perror("mkdtemp");
-    return 1;
-  }
-  const fs::path work_dir(dir_template);
-  const auto dump_path = [&](const std::string& name) { return (work_dir / name).string(); };
+  const ScratchDir work_dir("scan2lod_reconstruct_bench");
 
-  // Points, loaded in a child (load_oriented_points uses OpenMP).
   std::fprintf(stderr, "loading %s\n", s.input.c_str());
-  const std::string points_dump = dump_path("points.bin");
-  const Outcome loaded = run_in_child([&] {
-    const auto start = std::chrono::steady_clock::now();
-    dump_points(points_dump, load_oriented_points({s.input}));
-    return seconds_since(start);
-  }, 0);
-  if (loaded.status != Outcome::ok) {
-    std::fprintf(stderr, "loading failed: %s\n", loaded.message.c_str());
-    fs::remove_all(work_dir);
+  OrientedPoints points;
+  try {
+    points = load_points_in_child(s.input, work_dir.path("points.bin"));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "loading failed: %s\n", e.what());
     return 1;
   }
-  const OrientedPoints points = undump_points(points_dump);
   const Aabb box = bounds(points.positions);
   info.points = points.size();
   // A child that does nothing: the floor every case's peak includes.
-  info.baseline_mib = run_in_child([] { return 0.0; }, 0).peak_mib;
+  info.baseline_mib = run_in_child([] { return Values{}; }, 0).peak_mib;
   std::fprintf(stderr, "  %zu points; an idle child peaks at %.0f MiB\n", points.size(),
                info.baseline_mib);
 
   std::vector<Case> cases;
   const auto add = [&](Case c) {
-    c.mesh_path = dump_path("case" + std::to_string(cases.size()) + ".bin");
+    c.mesh_path = work_dir.path("case" + std::to_string(cases.size()) + ".bin");
     cases.push_back(std::move(c));
   };
   // `expected` is the peer's time on the bunny on the 2-core machine this
@@ -1085,7 +829,7 @@ int main(int argc, char** argv) {
     c.work = [&points, R](double* seconds, ReconstructStats* stats) {
       ReconstructOptions options;
       options.resolution = R;
-      const auto start = std::chrono::steady_clock::now();
+      const auto start = Clock::now();
       Reconstruction result = reconstruct(points, options);
       *seconds = seconds_since(start);
       *stats = result.stats;
@@ -1156,7 +900,7 @@ int main(int argc, char** argv) {
     c.work = [input, job_resolution](double* seconds, ReconstructStats* stats) {
       ReconstructOptions options;
       options.resolution = job_resolution;
-      const auto start = std::chrono::steady_clock::now();
+      const auto start = Clock::now();
       Reconstruction result = reconstruct(load_oriented_points({input}), options);
       *seconds = seconds_since(start);
       *stats = result.stats;
@@ -1211,8 +955,6 @@ int main(int argc, char** argv) {
       c.measure_error = e.what();
     }
   }
-  fs::remove_all(work_dir);
-
   print_report(cases, s, info);
   return 0;
 }

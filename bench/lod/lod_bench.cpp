@@ -36,7 +36,7 @@
 //      below 1 against every vertex-clustering peer, at most 1.5 against every
 //      quadric edge-collapse peer); and the report says which goals are met.
 //
-// Children get the work by fork() without exec, so the parent never runs
+// Children get the work by fork() without exec (bench/bench_support.h), so the parent never runs
 // OpenMP (reconstruct, load_oriented_points, compare_surfaces) before the last
 // child is done: libgomp's thread pool does not survive fork. Points are
 // loaded in a child, the model is built in children and handed back through a
@@ -46,6 +46,8 @@
 // bench/lod/REPORT.md); progress on stderr.
 
 #include "acquisition/load_inputs.h"
+#include "bench/bench_support.h"
+#include "bench/library_meshes.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/types.h"
@@ -66,212 +68,33 @@
 #include <meshoptimizer.h>
 #include <open3d/geometry/TriangleMesh.h>
 #include <open3d/utility/Logging.h>
-#include <vtkCellArray.h>
-#include <vtkIdList.h>
 #include <vtkNew.h>
-#include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkQuadricClustering.h>
 #include <vtkQuadricDecimation.h>
 #include <vtkSmartPointer.h>
 
-#include <signal.h>
-#include <sys/resource.h>
-#include <sys/utsname.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
-#include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace fs = std::filesystem;
 using namespace scan2lod;
+using namespace scan2lod::bench;
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
-std::string format(const char* fmt, ...) {
-  va_list args;
-  va_start(args, fmt);
-  va_list copy;
-  va_copy(copy, args);
-  const int n = std::vsnprintf(nullptr, 0, fmt, copy);
-  va_end(copy);
-  std::string out(std::size_t(std::max(n, 0)), '\0');
-  std::vsnprintf(out.data(), out.size() + 1, fmt, args);
-  va_end(args);
-  return out;
-}
-
-std::string fixed(double v, int digits) { return format("%.*f", digits, v); }
-
-// ---------------------------------------------------------------------------
-// Plain binary dumps for handing points and meshes from children to the parent.
-
-template <typename T>
-void write_array(std::ofstream& out, const std::vector<T>& v) {
-  static_assert(std::is_standard_layout_v<T>);
-  const std::uint64_t n = v.size();
-  out.write(reinterpret_cast<const char*>(&n), sizeof n);
-  out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(n * sizeof(T)));
-}
-
-template <typename T>
-void read_array(std::ifstream& in, std::vector<T>* v) {
-  std::uint64_t n = 0;
-  in.read(reinterpret_cast<char*>(&n), sizeof n);
-  if (!in) return;
-  v->resize(n);
-  in.read(reinterpret_cast<char*>(v->data()), std::streamsize(n * sizeof(T)));
-}
-
-void dump_points(const std::string& path, const OrientedPoints& p) {
-  std::ofstream out(path, std::ios::binary);
-  write_array(out, p.positions);
-  write_array(out, p.normals);
-  write_array(out, p.colors);
-  write_array(out, p.confidence);
-  write_array(out, p.spacing);
-  if (!out) throw InputError(path, "could not write the points dump");
-}
-
-OrientedPoints undump_points(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  OrientedPoints p;
-  read_array(in, &p.positions);
-  read_array(in, &p.normals);
-  read_array(in, &p.colors);
-  read_array(in, &p.confidence);
-  read_array(in, &p.spacing);
-  if (!in) throw InputError(path, "truncated points dump");
-  return p;
-}
-
-// Positions and triangles only: nothing else enters a measure.
-void dump_mesh(const std::string& path, const TriangleMesh& m) {
-  std::ofstream out(path, std::ios::binary);
-  write_array(out, m.positions);
-  write_array(out, m.triangles);
-  if (!out) throw InputError(path, "could not write the mesh dump");
-}
-
-TriangleMesh undump_mesh(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  TriangleMesh m;
-  read_array(in, &m.positions);
-  read_array(in, &m.triangles);
-  if (!in) throw InputError(path, "truncated mesh dump");
-  return m;
-}
-
-// ---------------------------------------------------------------------------
-// One piece of work in a forked child.
-
-// What a child reports: a few numbers whose meaning depends on the work.
-using Values = std::array<double, 8>;
-
-struct Outcome {
-  enum Status { ok, failed, timed_out, crashed } status = failed;
-  Values values{};
-  double peak_mib = 0;  // ru_maxrss of the child, also for killed children
-  std::string message;  // why it failed
-};
-
-// Fixed size and below PIPE_BUF, so one write() and no blocking before the read.
-struct ChildMessage {
-  Values values{};
-  int ok = 0;
-  char error[1024] = {};
-};
-static_assert(sizeof(ChildMessage) <= PIPE_BUF);
-
-// Runs `work` in a child; kills it after `timeout` seconds if timeout > 0.
-Outcome run_in_child(const std::function<Values()>& work, double timeout) {
-  std::fflush(stdout);
-  std::fflush(stderr);
-  int fds[2];
-  if (pipe(fds) != 0) throw std::runtime_error("pipe() failed");
-  const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error("fork() failed");
-  if (pid == 0) {
-    close(fds[0]);
-    ChildMessage msg;
-    try {
-      msg.values = work();
-      msg.ok = 1;
-    } catch (const std::exception& e) {
-      std::snprintf(msg.error, sizeof msg.error, "%s", e.what());
-    }
-    [[maybe_unused]] const ssize_t written = write(fds[1], &msg, sizeof msg);
-    _exit(0);  // no atexit handlers or static destructors of the parent's state
-  }
-  close(fds[1]);
-
-  const auto start = Clock::now();
-  int status = 0;
-  rusage usage{};
-  bool killed = false;
-  for (;;) {
-    const pid_t done = wait4(pid, &status, killed ? 0 : WNOHANG, &usage);
-    if (done == pid) break;
-    if (done < 0 && errno != EINTR) throw std::runtime_error("wait4() failed");
-    if (!killed && timeout > 0 && seconds_since(start) > timeout) {
-      kill(pid, SIGKILL);
-      killed = true;
-      continue;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-
-  Outcome out;
-  out.peak_mib = double(usage.ru_maxrss) / 1024.0;  // KiB on Linux
-  ChildMessage msg;
-  const ssize_t got = read(fds[0], &msg, sizeof msg);
-  close(fds[0]);
-  if (killed) {
-    out.status = Outcome::timed_out;
-    out.message = "killed at the " + std::to_string(int(timeout)) + " s timeout";
-  } else if (WIFSIGNALED(status)) {
-    out.status = Outcome::crashed;
-    out.message = std::string("crashed: ") + strsignal(WTERMSIG(status));
-  } else if (got != ssize_t(sizeof msg) || !msg.ok) {
-    out.status = Outcome::failed;
-    out.message = got == ssize_t(sizeof msg) ? msg.error : "exited without a result";
-  } else {
-    out.status = Outcome::ok;
-    out.values = msg.values;
-  }
-  return out;
-}
 
 // ---------------------------------------------------------------------------
 // The peers. Each takes the full mesh and a target triangle count, copies the
@@ -362,43 +185,6 @@ TriangleMesh run_openmesh(const TriangleMesh& full, std::int64_t target, PeerRun
   return out;
 }
 
-vtkSmartPointer<vtkPolyData> to_vtk(const TriangleMesh& m) {
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToFloat();
-  points->SetNumberOfPoints(vtkIdType(m.positions.size()));
-  for (std::size_t i = 0; i < m.positions.size(); ++i) points->SetPoint(vtkIdType(i), m.positions[i].data());
-  vtkNew<vtkCellArray> polys;
-  polys->AllocateExact(vtkIdType(m.triangles.size()), vtkIdType(3 * m.triangles.size()));
-  for (const Triangle& t : m.triangles) {
-    const vtkIdType ids[3] = {t[0], t[1], t[2]};
-    polys->InsertNextCell(3, ids);
-  }
-  auto poly = vtkSmartPointer<vtkPolyData>::New();
-  poly->SetPoints(points);
-  poly->SetPolys(polys);
-  return poly;
-}
-
-TriangleMesh from_vtk(vtkPolyData* poly) {
-  TriangleMesh out;
-  out.positions.resize(std::size_t(poly->GetNumberOfPoints()));
-  for (vtkIdType i = 0; i < poly->GetNumberOfPoints(); ++i) {
-    double p[3];
-    poly->GetPoint(i, p);
-    out.positions[std::size_t(i)] = Vec3d(p[0], p[1], p[2]).cast<float>();
-  }
-  vtkCellArray* polys = poly->GetPolys();
-  out.triangles.reserve(std::size_t(polys->GetNumberOfCells()));
-  vtkNew<vtkIdList> cell;
-  for (polys->InitTraversal(); polys->GetNextCell(cell);) {
-    if (cell->GetNumberOfIds() != 3)
-      throw std::runtime_error("VTK returned a polygon with " + std::to_string(cell->GetNumberOfIds()) +
-                               " corners, not a triangle");
-    out.triangles.push_back({std::int32_t(cell->GetId(0)), std::int32_t(cell->GetId(1)), std::int32_t(cell->GetId(2))});
-  }
-  return out;
-}
-
 // vtkQuadricDecimation (Garland-Heckbert edge collapse) with the reduction
 // that leaves `target` of the input's triangles.
 TriangleMesh run_vtk_decimation(const TriangleMesh& full, std::int64_t target, PeerRun* run) {
@@ -482,28 +268,10 @@ TriangleMesh run_vtk_clustering(const TriangleMesh& full, std::int64_t target, P
   return vtk_clustering(input, box, int(run->setting), &run->seconds);
 }
 
-open3d::geometry::TriangleMesh to_open3d(const TriangleMesh& m) {
-  open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
-  open3d::geometry::TriangleMesh out;
-  out.vertices_.reserve(m.positions.size());
-  for (const Vec3f& p : m.positions) out.vertices_.push_back(p.cast<double>());
-  out.triangles_.reserve(m.triangles.size());
-  for (const Triangle& t : m.triangles) out.triangles_.emplace_back(t[0], t[1], t[2]);
-  return out;
-}
-
-TriangleMesh from_open3d(const open3d::geometry::TriangleMesh& m) {
-  TriangleMesh out;
-  out.positions.reserve(m.vertices_.size());
-  for (const Eigen::Vector3d& v : m.vertices_) out.positions.push_back(v.cast<float>());
-  out.triangles.reserve(m.triangles_.size());
-  for (const Eigen::Vector3i& t : m.triangles_) out.triangles.push_back({t[0], t[1], t[2]});
-  return out;
-}
-
 // Open3D SimplifyQuadricDecimation (Garland-Heckbert) with the Python API's
 // defaults: no error bound, boundary weight 1.
 TriangleMesh run_open3d_decimation(const TriangleMesh& full, std::int64_t target, PeerRun* run) {
+  open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
   const open3d::geometry::TriangleMesh input = to_open3d(full);
   const auto start = Clock::now();
   const auto out = input.SimplifyQuadricDecimation(int(target), std::numeric_limits<double>::infinity(), 1.0);
@@ -515,6 +283,7 @@ TriangleMesh run_open3d_decimation(const TriangleMesh& full, std::int64_t target
 // voxel size whose output is closest to target: bisection on log(size), the
 // count falling as the voxels grow.
 TriangleMesh run_open3d_clustering(const TriangleMesh& full, std::int64_t target, PeerRun* run) {
+  open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
   const open3d::geometry::TriangleMesh input = to_open3d(full);
   if (std::isnan(run->setting)) {
     const double diagonal = bounds(full.positions).diagonal();
@@ -606,22 +375,9 @@ struct PeerCase {
   std::optional<SurfaceComparison> fidelity;
   std::string measure_error;
 
-  bool all_ok() const {
-    if (runs.empty()) return false;
-    for (const Outcome& o : runs)
-      if (o.status != Outcome::ok) return false;
-    return true;
-  }
-  double seconds() const {
-    std::vector<double> s;
-    for (const Outcome& o : runs) s.push_back(o.values[0]);
-    return median(s);
-  }
-  double peak_mib() const {
-    double m = 0;
-    for (const Outcome& o : runs) m = std::max(m, o.peak_mib);
-    return m;
-  }
+  bool all_ok() const { return bench::all_ok(runs); }
+  double seconds() const { return median_seconds(runs); }
+  double peak_mib() const { return bench::peak_mib(runs); }
 };
 
 // A mesh's two-sided mean distance to the full mesh: the mean of both
@@ -685,42 +441,6 @@ Values measure_extraction(const LodModel& model, std::size_t priority, int reps)
   return {median(alone), *std::min_element(alone.begin(), alone.end()),
           *std::max_element(alone.begin(), alone.end()), median(with_compact), double(alone.size()),
           double(triangles.size()), 0, 0};
-}
-
-// ---------------------------------------------------------------------------
-// Facts about the run.
-
-std::string source_revision() {
-  const auto run = [](const std::string& command) {
-    std::string out;
-    if (FILE* f = popen(command.c_str(), "r")) {
-      char buf[256];
-      while (std::fgets(buf, sizeof buf, f)) out += buf;
-      pclose(f);
-    }
-    return out;
-  };
-  const std::string git = "git -C '" + std::string(SCAN2LOD_SOURCE_DIR) + "' ";
-  std::string head = run(git + "rev-parse --short HEAD 2>/dev/null");
-  if (head.empty()) return {};
-  head.pop_back();
-  const bool dirty = !run(git + "status --porcelain --untracked-files=no 2>/dev/null").empty();
-  return head + (dirty ? " with uncommitted changes" : "");
-}
-
-std::string load_average() {
-  std::ifstream in("/proc/loadavg");
-  std::string one, five, fifteen;
-  in >> one >> five >> fifteen;
-  return one + " " + five + " " + fifteen;
-}
-
-std::string cpu_model() {
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpuinfo, line))
-    if (line.rfind("model name", 0) == 0 && line.find(':') != std::string::npos) return line.substr(line.find(':') + 2);
-  return {};
 }
 
 struct Settings {
@@ -1057,21 +777,10 @@ void report_notes(Report& r, const Settings& s, const RunInfo& info, const std::
 std::string make_report(const Settings& s, const RunInfo& info, const std::vector<Level>& levels,
                         const std::vector<Peer>& peers) {
   Report r;
-  utsname u{};
-  uname(&u);
-  char date[64];
-  const std::time_t now = std::time(nullptr);
-  std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
-  const std::string cpu = cpu_model();
   r.add("# LOD benchmark: scan2lod's marching-cube octree against mesh simplifiers\n\n");
-  r.add("%s · %s · nproc %ld%s%s · load average at start %s, after the timed cases %s\n\n", date, u.machine,
-        sysconf(_SC_NPROCESSORS_ONLN), cpu.empty() ? "" : " · ", cpu.c_str(), info.load_at_start.c_str(),
-        info.load_at_end.c_str());
+  r.add_text(run_header_line(info.load_at_start, info.load_at_end) + "\n\n");
   r.add("Command: `%s`  \n", info.command_line.c_str());
-  if (const char* policy = std::getenv("OMP_WAIT_POLICY"))
-    r.add("OpenMP: `OMP_WAIT_POLICY=%s`  \n", policy);
-  else
-    r.add("OpenMP: `OMP_WAIT_POLICY` unset (libgomp's default)  \n");
+  r.add_text(openmp_line());
   const std::string revision = source_revision();
   if (!revision.empty()) r.add("Source: %s (at run time)  \n", revision.c_str());
   r.add("Input: `%s` (%zu oriented points), R = %d\n\n", s.input.c_str(), info.points, s.resolution);
@@ -1082,26 +791,6 @@ std::string make_report(const Settings& s, const RunInfo& info, const std::vecto
   report_peers(r, levels, s.timeout);
   report_notes(r, s, info, peers, levels);
   return r.text();
-}
-
-std::string default_input() {
-  for (const char* c : {"data/bunny/bun.conf", "../shared/data/bunny/data/bun.conf"}) {
-    const fs::path p = fs::path(SCAN2LOD_SOURCE_DIR) / c;
-    if (fs::exists(p)) return fs::weakly_canonical(p).string();
-  }
-  return {};
-}
-
-// Writes `text` to `path` through a temporary file renamed into place, so an
-// interrupted run keeps the old report.
-void write_report(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    if (!out) throw InputError(tmp.string(), "could not write the report");
-  }
-  fs::rename(tmp, path);
 }
 
 }  // namespace
@@ -1140,33 +829,19 @@ int main(int argc, char** argv) {
 
   RunInfo info;
   info.load_at_start = load_average();
-  info.command_line = "scan2lod_bench_lod";
-  for (int i = 1; i < argc; ++i) info.command_line += std::string(" ") + argv[i];
+  info.command_line = command_line("scan2lod_bench_lod", argc, argv);
 
-  char dir_template[] = "/tmp/scan2lod_bench_lod.XXXXXX";
-  if (!mkdtemp(dir_template)) {
-    std::perror("mkdtemp");
-    return 1;
-  }
-  const fs::path work_dir(dir_template);
-  const auto work_path = [&](const std::string& name) { return (work_dir / name).string(); };
-  struct Cleanup {
-    fs::path dir;
-    ~Cleanup() { std::error_code ec; fs::remove_all(dir, ec); }
-  } cleanup{work_dir};
+  const ScratchDir work_dir("scan2lod_bench_lod");
+  const auto work_path = [&](const std::string& name) { return work_dir.path(name); };
 
-  // Points, loaded in a child (load_oriented_points uses OpenMP).
   std::fprintf(stderr, "loading %s\n", s.input.c_str());
-  const std::string points_dump = work_path("points.bin");
-  const Outcome loaded = run_in_child([&] {
-    dump_points(points_dump, load_oriented_points({s.input}));
-    return Values{};
-  }, 0);
-  if (loaded.status != Outcome::ok) {
-    std::fprintf(stderr, "loading failed: %s\n", loaded.message.c_str());
+  OrientedPoints points;
+  try {
+    points = load_points_in_child(s.input, work_path("points.bin"));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "loading failed: %s\n", e.what());
     return 1;
   }
-  const OrientedPoints points = undump_points(points_dump);
   info.points = points.size();
 
   // 1. Model builds; the first one also saves the model for the parent.
@@ -1269,23 +944,22 @@ int main(int argc, char** argv) {
       }
       std::fprintf(stderr, "%s at %s (%lld triangles)\n", p.name.c_str(), percent_label(l).c_str(),
                    (long long)l.triangles);
-      for (int run = 0; run < s.runs; ++run) {
-        if (run == 1 && !(c.runs[0].status == Outcome::ok && c.runs[0].values[0] < s.repeat_under)) break;
-        const double known = c.setting;
-        const Outcome o = run_in_child([&] {
-          PeerRun pr;
-          if (p.searched && run > 0) pr.setting = known;  // skip the search
-          const TriangleMesh out = p.work(full, l.triangles, &pr);
-          if (run == 0) dump_mesh(c.mesh_path, out);
-          return Values{pr.seconds, pr.setting, pr.rejected, double(out.triangles.size()), 0, 0, 0, 0};
-        }, s.timeout);
-        if (run == 0 && o.status == Outcome::ok) c.setting = o.values[1], c.rejected = o.values[2];
-        c.runs.push_back(o);
-        std::fprintf(stderr, "  run %d: %s, peak %.0f MiB\n", run + 1,
-                     o.status == Outcome::ok ? format("%.3f s, %.0f triangles", o.values[0], o.values[3]).c_str()
-                                             : o.message.c_str(),
-                     o.peak_mib);
-      }
+      c.runs = run_repeated(
+          [&](int run) {
+            PeerRun pr;
+            if (p.searched && run > 0) pr.setting = c.setting;  // skip the search
+            const TriangleMesh out = p.work(full, l.triangles, &pr);
+            if (run == 0) dump_mesh(c.mesh_path, out);
+            return Values{pr.seconds, pr.setting, pr.rejected, double(out.triangles.size()), 0, 0, 0, 0};
+          },
+          s.runs, s.repeat_under, s.timeout,
+          [&](int run, const Outcome& o) {
+            if (run == 0 && o.status == Outcome::ok) c.setting = o.values[1], c.rejected = o.values[2];
+            std::fprintf(stderr, "  run %d: %s, peak %.0f MiB\n", run + 1,
+                         o.status == Outcome::ok ? format("%.3f s, %.0f triangles", o.values[0], o.values[3]).c_str()
+                                                 : o.message.c_str(),
+                         o.peak_mib);
+          });
       l.peers.push_back(std::move(c));
     }
   }
@@ -1319,7 +993,7 @@ int main(int argc, char** argv) {
   std::fwrite(report.data(), 1, report.size(), stdout);
   if (s.write) {
     const fs::path path = fs::path(SCAN2LOD_SOURCE_DIR) / "bench" / "lod" / "REPORT.md";
-    write_report(path, report);
+    write_file_atomically(path, report);
     std::fprintf(stderr, "wrote %s\n", path.c_str());
   }
   return 0;
