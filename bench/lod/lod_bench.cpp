@@ -3,10 +3,11 @@
 // mesh and at the same triangle counts (the Stanford bunny scans by default).
 //
 // What is measured, each timed case in its own forked child process:
-//   1. Model build, --runs times (median): reconstruct(); the octree stage as
-//      `scan2lod build` runs it (a PointIndex kd-tree for the unlimited
-//      signed-distance field, then build_mc_octree()); number_nodes(). "Model
-//      build" = kd-tree + octree + numbering. Peak MiB: the child's ru_maxrss.
+//   1. Model build, --runs times (median), as `scan2lod build` runs it
+//      (bench/model_build.h): reconstruct(); build_mc_octree(reconstruction),
+//      whose coarse corners take the distance to the finished mesh;
+//      number_nodes(). "Model build" = octree + numbering. Peak MiB: the
+//      child's ru_maxrss.
 //   2. Extraction at 100, 80, 60, 40, 20, 5 and 1 % of the LOD array
 //      (priority_for_percent): extract_lod() alone, repeated at least --reps
 //      times and for at least 0.25 s with the scratch vectors reused, median
@@ -48,6 +49,7 @@
 #include "acquisition/load_inputs.h"
 #include "bench/bench_support.h"
 #include "bench/library_meshes.h"
+#include "bench/model_build.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/types.h"
@@ -58,7 +60,6 @@
 #include "measure/surface_distance.h"
 #include "measure/topology.h"
 #include "reconstruct/marching_cubes.h"
-#include "reconstruct/signed_distance.h"
 
 #include <CLI/CLI.hpp>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
@@ -462,7 +463,7 @@ struct RunInfo {
   std::size_t points = 0;
   double baseline_mib = 0;
   double total_seconds = 0;
-  std::vector<Outcome> builds;  // values: reconstruct, kd-tree, octree, numbering, mesh triangles
+  std::vector<Outcome> builds;  // values: reconstruct, octree, numbering, mesh triangles
   std::size_t nodes = 0, leaves = 0, expansions = 0, full_triangles = 0, full_vertices = 0;
   double diagonal = 0;
   int depth = 0;
@@ -522,15 +523,14 @@ void report_build(Report& r, const RunInfo& info) {
   r.add("## Model build (each run in its own process)\n\n");
   r.add("| stage | seconds (median, range) |\n|---|---:|\n");
   r.add("| `reconstruct()` | %s |\n", spread_cell(info.builds, 0, 1, 3).c_str());
-  r.add("| kd-tree for the octree's signed-distance field (`PointIndex`) | %s |\n",
+  r.add("| `build_mc_octree(reconstruction)` (with the distance field of the finished mesh) | %s |\n",
         spread_cell(info.builds, 1, 1, 3).c_str());
-  r.add("| `build_mc_octree()` | %s |\n", spread_cell(info.builds, 2, 1, 3).c_str());
-  r.add("| `number_nodes()` | %s |\n", spread_cell(info.builds, 3, 1, 3).c_str());
+  r.add("| `number_nodes()` | %s |\n", spread_cell(info.builds, 2, 1, 3).c_str());
   std::vector<Outcome> model = info.builds, total = info.builds;
-  for (Outcome& o : model) o.values[0] = o.values[1] + o.values[2] + o.values[3];
-  for (Outcome& o : total) o.values[0] += o.values[1] + o.values[2] + o.values[3];
-  r.add("| **model build** = kd-tree + octree + numbering | **%s** |\n", spread_cell(model, 0, 1, 3).c_str());
-  r.add("| points → model (all four) | %s |\n", spread_cell(total, 0, 1, 3).c_str());
+  for (Outcome& o : model) o.values[0] = o.values[1] + o.values[2];
+  for (Outcome& o : total) o.values[0] += o.values[1] + o.values[2];
+  r.add("| **model build** = octree + numbering | **%s** |\n", spread_cell(model, 0, 1, 3).c_str());
+  r.add("| points → model (all three) | %s |\n", spread_cell(total, 0, 1, 3).c_str());
   double peak = 0;
   for (const Outcome& o : info.builds) peak = std::max(peak, o.peak_mib);
   r.add("\nPeak RSS of a build process: %.0f MiB (an idle child of this benchmark peaks at %.0f MiB: "
@@ -665,11 +665,11 @@ void report_matrices(Report& r, const std::vector<Level>& levels, const std::vec
 
 std::vector<Goal> evaluate_goals(const std::vector<Level>& levels, const RunInfo& info) {
   std::vector<Goal> goals(5);
-  goals[0].statement = "Model build (kd-tree + `build_mc_octree` + `number_nodes`) under 1 s";
+  goals[0].statement = "Model build (`build_mc_octree` + `number_nodes`) under 1 s";
   {
     std::vector<double> v;
     for (const Outcome& o : info.builds)
-      if (o.status == Outcome::ok) v.push_back(o.values[1] + o.values[2] + o.values[3]);
+      if (o.status == Outcome::ok) v.push_back(o.values[1] + o.values[2]);
     goals[0].measured = !v.empty() && v.size() == info.builds.size();
     if (goals[0].measured && median(v) >= 1.0) goals[0].misses.push_back("median " + fixed(median(v), 2) + " s");
   }
@@ -849,31 +849,15 @@ int main(int argc, char** argv) {
   for (int run = 0; run < s.runs; ++run) {
     std::fprintf(stderr, "build %d/%d at R=%d\n", run + 1, s.runs, s.resolution);
     const Outcome o = run_in_child([&] {
-      ReconstructOptions options;
-      options.resolution = s.resolution;
-      auto start = Clock::now();
-      const Reconstruction r = reconstruct(points, options);
-      const double reconstruct_seconds = seconds_since(start);
-      start = Clock::now();
-      const PointIndex index(points);
-      const double index_seconds = seconds_since(start);
-      const SignedDistanceField field =
-          unlimited_distance_field(points, index, options.distance, float(r.leaves.grid.cube_size));
-      start = Clock::now();
-      LodModel model;
-      model.tree = build_mc_octree(r.leaves, r.mesh, field);
-      const double octree_seconds = seconds_since(start);
-      start = Clock::now();
-      model.lod = number_nodes(model.tree);
-      const double numbering_seconds = seconds_since(start);
-      if (run == 0) save_model(model_path, model);
-      return Values{reconstruct_seconds, index_seconds, octree_seconds, numbering_seconds,
-                    double(r.mesh.triangles.size()), 0, 0, 0};
+      const TimedModel t = build_model_timed(points, s.resolution);
+      if (run == 0) save_model(model_path, t.model);
+      return Values{t.reconstruct_seconds, t.octree_seconds, t.numbering_seconds,
+                    double(t.reconstruction.mesh.triangles.size()), 0, 0, 0, 0};
     }, s.timeout);
     std::fprintf(stderr, "  %s, peak %.0f MiB\n",
                  o.status == Outcome::ok
-                     ? format("reconstruct %.2f s, kd-tree %.2f s, octree %.2f s, numbering %.2f s", o.values[0],
-                              o.values[1], o.values[2], o.values[3]).c_str()
+                     ? format("reconstruct %.2f s, octree %.2f s, numbering %.2f s", o.values[0], o.values[1],
+                              o.values[2]).c_str()
                      : o.message.c_str(),
                  o.peak_mib);
     info.builds.push_back(o);
