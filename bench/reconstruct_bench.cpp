@@ -6,7 +6,9 @@
 //   - PCL Poisson and Open3D Poisson (trimmed by density) at depth 8 and 9;
 //   - VTK vtkSurfaceReconstructionFilter + vtkContourFilter at 128 samples per
 //     side (Hoppe's method; it estimates its own normals from the positions);
-// and a scaling table of scan2lod itself at R = 64 ... 512.
+// and scaling tables of scan2lod itself at R = 64 ... 512: reconstruct(), and
+// the LOD model build after it (build_mc_octree + number_nodes, as `scan2lod
+// build` runs them; bench/model_build.h).
 //
 // What is measured, per case, each in its own forked child process:
 //   - seconds: wall time of the library's reconstruction call alone, timed in
@@ -42,6 +44,7 @@
 #include "acquisition/load_inputs.h"
 #include "bench/bench_support.h"
 #include "bench/library_meshes.h"
+#include "bench/model_build.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/types.h"
@@ -532,59 +535,128 @@ void print_cases_table(const std::vector<Case>& cases) {
   }
 }
 
-// scan2lod alone over R: the work should follow the surface's area (×4 per
-// doubling of R), not the grid's volume (×8).
+// A table over R whose cells show their growth from the row of half the
+// resolution: the work should follow the surface's area (×4 per doubling of
+// R), not the grid's volume (×8).
+struct ScalingColumn {
+  std::string title;   // header cell
+  std::string growth;  // name in the growth line; empty: a plain value with `suffix`, no growth
+  int digits = 0;
+  std::string suffix;
+};
+
+struct ScalingRow {
+  int resolution = 0;
+  std::vector<double> values;  // one per column
+};
+
+void print_scaling(const std::vector<ScalingColumn>& columns, std::vector<ScalingRow> rows) {
+  std::sort(rows.begin(), rows.end(),
+            [](const ScalingRow& a, const ScalingRow& b) { return a.resolution < b.resolution; });
+  std::printf("| R |");
+  for (const ScalingColumn& c : columns) std::printf(" %s |", c.title.c_str());
+  std::printf("\n|---:|");
+  for (std::size_t k = 0; k < columns.size(); ++k) std::printf("---:|");
+  std::printf("\n");
+  const auto half = [&](std::size_t i) -> const ScalingRow* {
+    return i > 0 && rows[i - 1].resolution * 2 == rows[i].resolution ? &rows[i - 1] : nullptr;
+  };
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    std::printf("| %d |", rows[i].resolution);
+    for (std::size_t k = 0; k < columns.size(); ++k) {
+      const double v = rows[i].values[k];
+      if (columns[k].growth.empty()) {
+        std::printf(" %s%s |", fixed(v, columns[k].digits).c_str(), columns[k].suffix.c_str());
+        continue;
+      }
+      const ScalingRow* h = half(i);
+      std::printf(" %s |", with_growth(v, h ? std::optional<double>(h->values[k]) : std::nullopt,
+                                       columns[k].digits).c_str());
+    }
+    std::printf("\n");
+  }
+  // Geometric mean of the growth per doubling, over all doublings present.
+  std::string line;
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    if (columns[k].growth.empty()) continue;
+    double log_sum = 0;
+    int n = 0;
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      if (const ScalingRow* h = half(i); h && h->values[k] > 0)
+        log_sum += std::log(rows[i].values[k] / h->values[k]), ++n;
+    line += (line.empty() ? "" : ", ") + columns[k].growth + " ×" +
+            (n ? fixed(std::exp(log_sum / n), 2) : std::string("—"));
+  }
+  std::printf("\nGrowth per doubling of R (in parentheses above; geometric mean over the doublings "
+              "here): %s. A dense grid grows ×8 per doubling, a surface ×4.\n", line.c_str());
+}
+
+// scan2lod reconstruct() alone over R.
 void print_scaling_table(const std::vector<Case>& cases) {
-  std::vector<const Case*> ours;
+  std::vector<ScalingRow> rows;
   for (const Case& c : cases)
-    if (c.kind == Case::ours && c.all_ok() && c.topology) ours.push_back(&c);
-  std::sort(ours.begin(), ours.end(),
-            [](const Case* a, const Case* b) { return a->resolution < b->resolution; });
-  if (ours.empty()) {
+    if (c.kind == Case::ours && c.all_ok() && c.topology)
+      rows.push_back({c.resolution,
+                      {c.seconds(), c.peak_mib(), double(c.stats.cubes_touched), double(c.stats.corners_evaluated),
+                       double(c.topology->triangles),
+                       100 * double(c.stats.cubes_touched) / std::pow(double(c.resolution), 3)}});
+  if (rows.empty()) {
     std::printf("No scan2lod case completed.\n");
     return;
   }
-  std::printf("| R | seconds (median) | peak MiB | cubes touched | corners evaluated | triangles "
-              "| cubes touched / R³ |\n");
-  std::printf("|---:|---:|---:|---:|---:|---:|---:|\n");
-  // Growth is shown against the row of half the resolution only.
-  const auto half = [&](std::size_t i) -> const Case* {
-    return i > 0 && ours[i - 1]->resolution * 2 == ours[i]->resolution ? ours[i - 1] : nullptr;
-  };
-  const auto previous = [&](std::size_t i, const std::function<double(const Case&)>& f) {
-    const Case* h = half(i);
-    return h ? std::optional<double>(f(*h)) : std::nullopt;
-  };
-  const auto seconds = [](const Case& c) { return c.seconds(); };
-  const auto peak = [](const Case& c) { return c.peak_mib(); };
-  const auto touched = [](const Case& c) { return double(c.stats.cubes_touched); };
-  const auto corners = [](const Case& c) { return double(c.stats.corners_evaluated); };
-  const auto triangles = [](const Case& c) { return double(c.topology->triangles); };
-  for (std::size_t i = 0; i < ours.size(); ++i) {
-    const Case& c = *ours[i];
-    const double cubes = std::pow(double(c.resolution), 3);
-    std::printf("| %d | %s | %s | %s | %s | %s | %s%% |\n", c.resolution,
-                with_growth(seconds(c), previous(i, seconds), 2).c_str(),
-                with_growth(peak(c), previous(i, peak), 0).c_str(),
-                with_growth(touched(c), previous(i, touched), 0).c_str(),
-                with_growth(corners(c), previous(i, corners), 0).c_str(),
-                with_growth(triangles(c), previous(i, triangles), 0).c_str(),
-                fixed(100 * touched(c) / cubes, 3).c_str());
+  print_scaling({{"seconds (median)", "seconds", 2, ""},
+                 {"peak MiB", "peak MiB", 0, ""},
+                 {"cubes touched", "cubes touched", 0, ""},
+                 {"corners evaluated", "corners evaluated", 0, ""},
+                 {"triangles", "triangles", 0, ""},
+                 {"cubes touched / R³", "", 3, "%"}},
+                rows);
+}
+
+// The LOD model build over R, one child per run: values are the seconds of
+// reconstruct + octree + numbering, then of each, then the model's counts.
+struct ModelBuildCase {
+  int resolution = 0;
+  std::vector<Outcome> runs;  // empty: skipped
+  enum Value { total, reconstruct, octree, numbering, nodes, expansions, triangles };
+  double median(Value v) const {
+    std::vector<double> x;
+    for (const Outcome& o : runs) x.push_back(o.values[v]);
+    return bench::median(x);
   }
-  // Geometric mean of the growth per doubling, over all doublings present.
-  const auto mean_growth = [&](const std::function<double(const Case&)>& f) {
-    double log_sum = 0;
-    int n = 0;
-    for (std::size_t i = 0; i < ours.size(); ++i)
-      if (const Case* h = half(i); h && f(*h) > 0) log_sum += std::log(f(*ours[i]) / f(*h)), ++n;
-    return n ? fixed(std::exp(log_sum / n), 2) : std::string("—");
-  };
-  std::printf("\nGrowth per doubling of R (in parentheses above; geometric mean over the doublings "
-              "here): seconds ×%s, peak MiB ×%s, cubes touched ×%s, corners evaluated ×%s, "
-              "triangles ×%s. A dense grid grows ×8 per doubling, a surface ×4.\n",
-              mean_growth(seconds).c_str(), mean_growth(peak).c_str(),
-              mean_growth(touched).c_str(), mean_growth(corners).c_str(),
-              mean_growth(triangles).c_str());
+};
+
+void print_model_scaling_table(const std::vector<ModelBuildCase>& builds) {
+  std::vector<ScalingRow> rows;
+  for (const ModelBuildCase& b : builds) {
+    if (!all_ok(b.runs)) continue;
+    using V = ModelBuildCase::Value;
+    rows.push_back({b.resolution,
+                    {b.median(V::reconstruct), b.median(V::octree) , b.median(V::numbering),
+                     b.median(V::octree) + b.median(V::numbering), b.median(V::total), peak_mib(b.runs),
+                     b.median(V::nodes), b.median(V::expansions), b.median(V::triangles)}});
+  }
+  for (const ModelBuildCase& b : builds)
+    if (!b.runs.empty() && !all_ok(b.runs))
+      for (const Outcome& o : b.runs)
+        if (o.status != Outcome::ok) {
+          std::printf("R=%d: %s.\n\n", b.resolution, o.message.c_str());
+          break;
+        }
+  if (rows.empty()) {
+    std::printf("No model build completed.\n");
+    return;
+  }
+  print_scaling({{"`reconstruct()` s", "reconstruct seconds", 2, ""},
+                 {"`build_mc_octree()` s", "octree seconds", 2, ""},
+                 {"`number_nodes()` s", "numbering seconds", 2, ""},
+                 {"**model build** s (octree + numbering)", "model build seconds", 2, ""},
+                 {"points → model s", "points → model seconds", 2, ""},
+                 {"peak MiB", "peak MiB", 0, ""},
+                 {"octree nodes", "nodes", 0, ""},
+                 {"expansions", "expansions", 0, ""},
+                 {"triangles at 100 %", "triangles", 0, ""}},
+                rows);
 }
 
 // The best peer for time (lowest ratio to scan2lod at its comparable R) and for
@@ -629,7 +701,8 @@ void print_summary(const std::vector<Case>& cases) {
   }
 }
 
-void print_notes(const std::vector<Case>& cases, const Settings& s, const RunInfo& info) {
+void print_notes(const std::vector<Case>& cases, const std::vector<ModelBuildCase>& builds, const Settings& s,
+                 const RunInfo& info) {
   std::printf("- Every case ran in its own forked process; seconds are wall time of the "
               "reconstruction call alone, peak MiB is that process's `ru_maxrss`. It includes "
               "what the child inherits from the parent (the loaded points, the libraries it "
@@ -656,6 +729,13 @@ void print_notes(const std::vector<Case>& cases, const Settings& s, const RunInf
               "files. It drops pieces under 1%% of its triangles and closes small holes "
               "(`min_piece`, `max_hole`); the bunny's open bottom stays open.\n",
               sysconf(_SC_NPROCESSORS_ONLN));
+  if (std::any_of(builds.begin(), builds.end(), [](const ModelBuildCase& b) { return !b.runs.empty(); }))
+    std::printf("- LOD model build: as `scan2lod build` makes it (`bench/model_build.h`): `reconstruct()`, "
+                "then `build_mc_octree(reconstruction)` (coarse corners signed by the distance to the "
+                "finished mesh, its field built inside that call) and `number_nodes()`, each timed; one "
+                "child per run, repeated like the cases above when the whole took under %s s. Peak MiB is "
+                "that child's, so it includes the reconstruction's.\n",
+                fixed(s.repeat_under, 0).c_str());
   // Each peer's parameters, if it ran.
   const auto ran = [&](const std::string& method) {
     return std::any_of(cases.begin(), cases.end(),
@@ -715,7 +795,8 @@ void print_notes(const std::vector<Case>& cases, const Settings& s, const RunInf
   }
 }
 
-void print_report(const std::vector<Case>& cases, const Settings& s, const RunInfo& info) {
+void print_report(const std::vector<Case>& cases, const std::vector<ModelBuildCase>& builds, const Settings& s,
+                  const RunInfo& info) {
   std::printf("# Reconstruction benchmark: scan2lod against PCL, Open3D and VTK\n\n");
   std::printf("%s\n\n", run_header_line(info.load_at_start, info.load_at_end).c_str());
   std::printf("Command: `%s`  \n", info.command_line.c_str());
@@ -731,8 +812,10 @@ void print_report(const std::vector<Case>& cases, const Settings& s, const RunIn
   print_cases_table(cases);
   std::printf("\n## Scaling of scan2lod reconstruct()\n\n");
   print_scaling_table(cases);
+  std::printf("\n## Scaling of the LOD model build (`scan2lod build`: reconstruct, octree, numbering)\n\n");
+  print_model_scaling_table(builds);
   std::printf("\n## Notes\n\n");
-  print_notes(cases, s, info);
+  print_notes(cases, builds, s, info);
   std::printf("\n## Summary: scan2lod against the best peer\n\n");
   print_summary(cases);
 }
@@ -923,6 +1006,37 @@ int main(int argc, char** argv) {
     else std::fprintf(stderr, "%s: %s\n", c.name().c_str(), c.skipped.c_str());
   }
 
+  // The LOD model build at every R, for its scaling.
+  std::vector<ModelBuildCase> builds;
+  for (const int R : resolutions) {
+    ModelBuildCase b;
+    b.resolution = R;
+    const std::string name = "scan2lod model build R=" + std::to_string(R);
+    if (name.find(s.only) == std::string::npos) {
+      std::fprintf(stderr, "%s: skipped (--only)\n", name.c_str());
+      builds.push_back(std::move(b));
+      continue;
+    }
+    std::fprintf(stderr, "%s\n", name.c_str());
+    b.runs = run_repeated(
+        [&](int) {
+          const TimedModel t = build_model_timed(points, R);
+          return Values{t.reconstruct_seconds + t.model_seconds(), t.reconstruct_seconds, t.octree_seconds,
+                        t.numbering_seconds, double(t.model.tree.size()), double(t.model.lod.full()),
+                        double(t.reconstruction.mesh.triangles.size()), 0};
+        },
+        s.runs, s.repeat_under, s.timeout,
+        [](int run, const Outcome& o) {
+          std::fprintf(stderr, "  run %-3d %s, peak %.0f MiB\n", run + 1,
+                       o.status == Outcome::ok
+                           ? format("reconstruct %.2f s, octree %.2f s, numbering %.2f s", o.values[1],
+                                    o.values[2], o.values[3]).c_str()
+                           : o.message.c_str(),
+                       o.peak_mib);
+        });
+    builds.push_back(std::move(b));
+  }
+
   info.load_at_end = load_average();
 
   // Measuring, in this process: no more forks from here on.
@@ -955,6 +1069,6 @@ int main(int argc, char** argv) {
       c.measure_error = e.what();
     }
   }
-  print_report(cases, s, info);
+  print_report(cases, builds, s, info);
   return 0;
 }
