@@ -15,5 +15,6 @@ void add_extract_command(CLI::App& app);  // .mco -> mesh at one level of detail
 void add_info_command(CLI::App& app);     // .mco -> levels and sizes
 void add_render_command(CLI::App& app);   // visualize/: .mco -> PNG montage of levels
 void add_plot_command(CLI::App& app);     // visualize/: .mco -> LOD graphs (PNG)
+void add_view_command(CLI::App& app);     // visualize/: the interactive viewer
 
 }  // namespace scan2lod::cli

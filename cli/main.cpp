@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   scan2lod::cli::add_info_command(app);
   scan2lod::cli::add_render_command(app);
   scan2lod::cli::add_plot_command(app);
+  scan2lod::cli::add_view_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

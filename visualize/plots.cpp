@@ -54,6 +54,17 @@ void label(vtkChartXY* chart, const std::string& title, const char* x, const cha
   }
 }
 
+// Fixes the left axis a little beyond the data, so a run of values on the
+// range's edge (a metric of 0 for many priorities) is not hidden under the axis.
+void pad_left_axis(vtkChartXY* chart, const std::vector<double>& values) {
+  if (values.empty()) return;
+  const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+  const double margin = 0.05 * std::max(*hi - *lo, 1e-12);
+  vtkAxis* axis = chart->GetAxis(vtkAxis::LEFT);
+  axis->SetBehavior(vtkAxis::FIXED);
+  axis->SetRange(*lo - margin, *hi + margin);
+}
+
 }  // namespace
 
 std::vector<LevelError> level_errors(const LodModel& model, const TriangleMesh& reference,
@@ -120,6 +131,7 @@ PlotPicture write_lod_plots(const LodModel& model, const std::vector<LevelError>
   vtkChartXY* a = chart_at(0, "LOD metric (Fig. 6.6)");
   label(a, "LOD metric (Fig. 6.6)", "priority number", "LOD metric (area)");
   add_line(a, metrics, 1, kPlotBlue, 1.f);
+  pad_left_axis(a, metric);
 
   // Fig. 6.7: its first priorities, where the order matters most.
   const std::size_t part = std::min(options.part, lod.full());
@@ -130,6 +142,7 @@ PlotPicture write_lod_plots(const LodModel& model, const std::vector<LevelError>
   vtkChartXY* b = chart_at(1, part_title);
   label(b, part_title, "priority number", "LOD metric (area)");
   add_line(b, head, 1, kPlotBlue, 1.5f);
+  pad_left_axis(b, std::vector<double>(metric.begin(), metric.begin() + long(part)));
 
   // Fig. 6.8: triangles after each number of expansions.
   std::vector<double> steps, triangles;
@@ -143,6 +156,7 @@ PlotPicture write_lod_plots(const LodModel& model, const std::vector<LevelError>
   vtkChartXY* c = chart_at(2, "Accumulated triangles (Fig. 6.8)");
   label(c, "Accumulated triangles (Fig. 6.8)", "priority number", "triangles");
   add_line(c, accumulation, 1, kPlotBlue, 2.f);
+  pad_left_axis(c, triangles);
 
   vtkNew<vtkTable> error_table;
   if (!errors.empty()) {

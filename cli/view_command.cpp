@@ -1,0 +1,67 @@
+// scan2lod view: the interactive VTK viewer on a .mco model, a mesh or a scan
+// set (visualize/viewer.h). --script drives it without a human: the same
+// slider moves and key presses, then it exits.
+#include "cli/commands.h"
+#include "core/error.h"
+#include "visualize/montage.h"
+#include "visualize/png_output.h"
+#include "visualize/viewer.h"
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+namespace scan2lod::cli {
+
+void add_view_command(CLI::App& app) {
+  struct Args {
+    std::vector<std::string> inputs;
+    std::string size = "1200x800", screenshot = "scan2lod_view.png", script;
+    double percent = 100, compare = 20;
+    bool offscreen = false;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* cmd = app.add_subcommand("view", "Interactive viewer: a .mco model's levels, a mesh, or a scan set");
+  cmd->add_option("inputs", args->inputs,
+                  "A .mco model, a mesh (.ply .obj .off .stl .vtp), or a scan set (.conf, range-grid PLYs, PCDs)")
+      ->required();
+  cmd->add_option("--percent", args->percent, "First level shown (% of the LOD array)")->capture_default_str();
+  cmd->add_option("--compare", args->compare, "Level of the split view's right half (key v)")->capture_default_str();
+  cmd->add_option("--size", args->size, "Window pixels, WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_option("--screenshot", args->screenshot, "Where key s saves (NAME_2.png, ... once it exists)")
+      ->capture_default_str();
+  cmd->add_option("--script", args->script,
+                  "Run commands from FILE instead of waiting for a user, print the state after each, and exit "
+                  "(percent P | triangles T | slider V | key KEY | screenshot PATH | print)");
+  cmd->add_flag("--offscreen", args->offscreen, "Render without showing a window (implied by --script)");
+  cmd->callback([args] {
+    ViewerOptions options;
+    parse_size(args->size, "--size", &options.width, &options.height);
+    if (!(args->percent >= 0 && args->percent <= 100))
+      throw InputError("", "--percent must be between 0 and 100, got " + std::to_string(args->percent));
+    if (!(args->compare >= 0 && args->compare <= 100))
+      throw InputError("", "--compare must be between 0 and 100, got " + std::to_string(args->compare));
+    check_png_output(args->screenshot);
+    std::ifstream script;
+    if (!args->script.empty()) {
+      script.open(args->script);
+      if (!script) throw InputError(args->script, "cannot open the script");
+    }
+    options.percent = args->percent;
+    options.compare_percent = args->compare;
+    options.screenshot = args->screenshot;
+    options.offscreen = args->offscreen || !args->script.empty();
+    require_display("view");
+
+    Viewer viewer(load_viewer_input(args->inputs), options);
+    if (!args->script.empty()) {
+      std::cout << describe(viewer.state()) << '\n';
+      viewer.run_script(script, args->script, std::cout);
+      return;
+    }
+    viewer.start();
+  });
+}
+
+}  // namespace scan2lod::cli

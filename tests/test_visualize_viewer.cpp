@@ -1,0 +1,235 @@
+// The interactive viewer without a human: built in-process on the bunny model
+// and driven by the events a user's hands would send (slider widget
+// InteractionEvents, key presses through the interactor), then through
+// `scan2lod view --script`. After each move the displayed triangle count must
+// be that of the level the extraction API gives for the slider's value.
+#include "lod/lod_array.h"
+#include "lod/model_file.h"
+#include "visualize/levels.h"
+#include "visualize/octree_cells.h"
+#include "visualize/scene.h"
+#include "visualize/viewer.h"
+
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <vtkCommand.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGReader.h>
+#include <vtkRenderWindowInteractor.h>
+#include <vtkSliderRepresentation.h>
+#include <vtkSliderWidget.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using scan2lod::testing::CliRun;
+
+fs::path scratch() {
+  const fs::path dir = scan2lod::testing::scratch_folder() / "viewer";
+  fs::create_directories(dir);
+  return dir;
+}
+
+bool have_display() {
+  const char* d = std::getenv("DISPLAY");
+  return d && *d;
+}
+
+const std::string kScans = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf";
+
+const fs::path& bunny_model() {
+  static const fs::path path = [] {
+    const fs::path p = scratch() / "bunny64.mco";
+    const CliRun r = scan2lod::testing::run_cli("build " + kScans + " -o " + p.string() + " -r 64 -q");
+    EXPECT_EQ(r.status, 0) << r.output;
+    return p;
+  }();
+  return path;
+}
+
+// A user's slider drag, as the widget reports it.
+void drag_slider(scan2lod::Viewer& viewer, double value) {
+  vtkSliderWidget* slider = viewer.slider();
+  static_cast<vtkSliderRepresentation*>(slider->GetRepresentation())->SetValue(value);
+  slider->InvokeEvent(vtkCommand::StartInteractionEvent);
+  slider->InvokeEvent(vtkCommand::InteractionEvent);
+  slider->InvokeEvent(vtkCommand::EndInteractionEvent);
+  viewer.interactor()->Render();
+}
+
+// A user's key press, as X delivers it to the interactor.
+void type_key(scan2lod::Viewer& viewer, char key) {
+  vtkRenderWindowInteractor* i = viewer.interactor();
+  const std::string sym(1, key);
+  i->SetKeyEventInformation(0, 0, key, 1, sym.c_str());
+  i->InvokeEvent(vtkCommand::KeyPressEvent);
+  i->InvokeEvent(vtkCommand::CharEvent);
+  i->InvokeEvent(vtkCommand::KeyReleaseEvent);
+}
+
+double covered_fraction(const fs::path& png) {
+  vtkNew<vtkPNGReader> reader;
+  reader->SetFileName(png.c_str());
+  reader->Update();
+  vtkImageData* image = reader->GetOutput();
+  int dims[3];
+  image->GetDimensions(dims);
+  const auto* p = static_cast<const unsigned char*>(image->GetScalarPointer());
+  const int c = image->GetNumberOfScalarComponents();
+  std::size_t hits = 0, n = std::size_t(dims[0]) * dims[1];
+  for (std::size_t i = 0; i < n; ++i) hits += p[c * i] < 240 || p[c * i + 1] < 240 || p[c * i + 2] < 240;
+  return double(hits) / double(n);
+}
+
+}  // namespace
+
+TEST(VisualizeViewer, SliderMovesShowTheLevelTheExtractionApiGives) {
+  if (!have_display()) GTEST_SKIP() << "no X display; scripts/build.sh test runs the tests under xvfb-run";
+  const scan2lod::LodModel model = scan2lod::load_model(bunny_model().string());
+  scan2lod::LevelSource levels(model);
+
+  scan2lod::ViewerOptions options;
+  options.width = 640;
+  options.height = 480;
+  options.offscreen = true;
+  options.screenshot = (scratch() / "shot.png").string();
+  scan2lod::Viewer viewer(scan2lod::load_viewer_input({bunny_model().string()}), options);
+  ASSERT_NE(viewer.slider(), nullptr);
+  EXPECT_EQ(viewer.state().triangles, levels.at_percent(100).mesh.triangles.size());
+
+  for (double percent : {20.0, 60.0, 5.0, 100.0, 0.0, 37.5}) {
+    drag_slider(viewer, percent);
+    const scan2lod::Level expected = levels.at_percent(percent);
+    const scan2lod::ViewerState s = viewer.state();
+    EXPECT_EQ(s.priority, expected.priority) << percent << " %";
+    EXPECT_EQ(s.triangles, expected.mesh.triangles.size()) << percent << " %";
+    EXPECT_EQ(s.vertices, expected.mesh.positions.size()) << percent << " %";
+    EXPECT_NE(s.overlay.find(scan2lod::thousands(s.triangles) + " triangles"), std::string::npos) << s.overlay;
+    EXPECT_GE(s.extract_ms, 0.0);
+  }
+  // Fewer triangles further down the slider.
+  drag_slider(viewer, 10);
+  const std::size_t at10 = viewer.state().triangles;
+  drag_slider(viewer, 90);
+  EXPECT_GT(viewer.state().triangles, 2 * at10);
+
+  // Keys: drawing modes, octree cells, split view.
+  type_key(viewer, '2');
+  EXPECT_EQ(viewer.state().mode, scan2lod::DrawMode::wireframe);
+  type_key(viewer, '3');
+  EXPECT_EQ(viewer.state().mode, scan2lod::DrawMode::shaded_edges);
+  type_key(viewer, '4');
+  EXPECT_EQ(viewer.state().mode, scan2lod::DrawMode::points);
+  type_key(viewer, '5');
+  EXPECT_EQ(viewer.state().mode, scan2lod::DrawMode::vertex_colors);
+  type_key(viewer, '1');
+  EXPECT_EQ(viewer.state().mode, scan2lod::DrawMode::shaded);
+  type_key(viewer, 'o');
+  ASSERT_TRUE(viewer.state().cells);
+  EXPECT_EQ(viewer.state().cell_count,
+            scan2lod::lod_cut(model.tree, model.lod, viewer.state().priority).size());
+  drag_slider(viewer, 0);
+  EXPECT_EQ(viewer.state().cell_count, 1u);  // the root alone
+  drag_slider(viewer, 100);
+  type_key(viewer, 'v');
+  ASSERT_TRUE(viewer.state().split);
+  EXPECT_EQ(viewer.state().compare_triangles, levels.at_percent(20).mesh.triangles.size());
+  type_key(viewer, ']');
+  EXPECT_EQ(viewer.state().compare_triangles, levels.at_percent(30).mesh.triangles.size());
+
+  // By triangle count: the finest level within the budget.
+  type_key(viewer, 't');
+  ASSERT_TRUE(viewer.state().slider_by_triangles);
+  const std::int64_t budget = std::int64_t(levels.at_percent(50).mesh.triangles.size());
+  drag_slider(viewer, double(budget));
+  EXPECT_EQ(viewer.state().priority, scan2lod::priority_for_triangles(model.lod, budget));
+  EXPECT_LE(std::int64_t(viewer.state().triangles), budget);
+  EXPECT_GT(std::int64_t(viewer.state().triangles), budget * 9 / 10);
+
+  // r frames the camera again, s saves the window.
+  type_key(viewer, 'r');
+  type_key(viewer, 's');
+  ASSERT_EQ(viewer.state().last_screenshot, options.screenshot);
+  ASSERT_TRUE(fs::exists(options.screenshot));
+  EXPECT_GT(covered_fraction(options.screenshot), 0.1);
+  type_key(viewer, 's');  // the first picture is kept, the next gets a number
+  EXPECT_EQ(viewer.state().last_screenshot, (scratch() / "shot_2.png").string());
+}
+
+TEST(VisualizeViewer, ScriptDrivesTheCommandAndReportsEachStep) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const CliRun info = scan2lod::testing::run_cli("info " + bunny_model().string(), false);
+  ASSERT_EQ(info.status, 0);
+  const fs::path script = scratch() / "steps.txt", shot = scratch() / "scripted.png";
+  std::ofstream(script) << "# a user's session\npercent 20\nkey o\nkey Right\npercent 100\nkey 2\nscreenshot "
+                        << shot.string() << "\n";
+  const CliRun r = scan2lod::testing::run_cli(
+      "view " + bunny_model().string() + " --size 500x400 --script " + script.string(), false);
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::vector<std::string> lines;
+  std::istringstream in(r.output);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 7u) << r.output;  // the start, then one per command
+  const scan2lod::LodModel model = scan2lod::load_model(bunny_model().string());
+  scan2lod::LevelSource levels(model);
+  auto shows = [&](const std::string& line, double percent) {
+    return line.find("triangles " + std::to_string(levels.at_percent(percent).mesh.triangles.size()) + " ") !=
+           std::string::npos;
+  };
+  EXPECT_TRUE(shows(lines[0], 100)) << lines[0];
+  EXPECT_TRUE(shows(lines[1], 20)) << lines[1];
+  EXPECT_NE(lines[2].find("cells "), std::string::npos);
+  EXPECT_EQ(lines[2].find("cells off"), std::string::npos) << lines[2];
+  EXPECT_TRUE(shows(lines[3], 21)) << lines[3];  // Right: one percent finer
+  EXPECT_TRUE(shows(lines[4], 100)) << lines[4];
+  EXPECT_NE(lines[5].find("mode wireframe"), std::string::npos) << lines[5];
+  EXPECT_NE(lines[6].find("-> " + shot.string()), std::string::npos) << lines[6];
+  EXPECT_GT(covered_fraction(shot), 0.05);
+}
+
+TEST(VisualizeViewer, ScanSetsShowPointsAndNormals) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const fs::path script = scratch() / "scans.txt", shot = scratch() / "scans.png";
+  std::ofstream(script) << "key n\nscreenshot " << shot.string() << "\n";
+  const CliRun r =
+      scan2lod::testing::run_cli("view " + kScans + " --size 400x300 --script " + script.string(), false);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("points 358808 normals on\npoints 358808 normals off\n"), std::string::npos) << r.output;
+  EXPECT_GT(covered_fraction(shot), 0.1);
+}
+
+TEST(VisualizeViewer, BadInputEndsInAClearError) {
+  const fs::path bad_script = scratch() / "bad_script.txt";
+  std::ofstream(bad_script) << "percent 20\njump 3\n";
+  struct Case {
+    std::string args, expected;
+  };
+  const std::vector<Case> cases = {
+      {"view " + (scratch() / "missing.mco").string(), "missing.mco"},
+      {"view " + (scratch() / "notes.txt").string(), "view expects a model (.mco), a mesh"},
+      {"view " + bunny_model().string() + " --percent 150", "between 0 and 100"},
+      {"view " + bunny_model().string() + " --script " + (scratch() / "none.txt").string(), "none.txt"},
+      {"view " + bunny_model().string() + " --screenshot shot.jpg", ".png"},
+  };
+  for (const Case& c : cases) {
+    const CliRun r = scan2lod::testing::run_cli(c.args);
+    EXPECT_NE(r.status, 0) << c.args;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << " -> " << r.output;
+  }
+  if (have_display()) {
+    const CliRun r = scan2lod::testing::run_cli("view " + bunny_model().string() + " --script " + bad_script.string());
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.output.find("bad_script.txt: line 2: unknown command 'jump'"), std::string::npos) << r.output;
+  }
+}

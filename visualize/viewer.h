@@ -1,0 +1,124 @@
+// The interactive viewer (`scan2lod view`): one VTK window on a LOD model, a
+// mesh or a scan set. On a model a slider (vtkSliderWidget) picks the level by
+// percentage of the LOD array or by triangle budget, and every move re-extracts
+// it by reference through the same calls as `scan2lod extract` (LevelSource):
+// nothing is simplified again. Keys switch the drawing (shaded, wireframe,
+// shaded with edges, points, vertex colour), show the octree cells of the
+// current cut coloured by level, and split the window into two levels under
+// one camera. A scan set shows each range image's oriented points in its own
+// colour with its normals as short lines, to check alignment and normals
+// before a build.
+//
+// Everything a user does goes through the interactor and the slider widget,
+// and `move_slider`, `press_key` and `run_script` send exactly those events,
+// so the viewer can be driven without a human (tests, scripted screenshots).
+#pragma once
+
+#include "core/types.h"
+#include "lod/model_file.h"
+
+#include <iosfwd>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+class vtkRenderWindowInteractor;
+class vtkSliderWidget;
+
+namespace scan2lod {
+
+// What `scan2lod view` was pointed at.
+struct ViewerInput {
+  enum class Kind { model, mesh, scans } kind = Kind::mesh;
+  std::string source;                // the file(s), for the window title and messages
+  std::optional<LodModel> model;     // Kind::model
+  TriangleMesh mesh;                 // Kind::mesh
+  std::vector<OrientedPoints> scans; // Kind::scans: one per range image, common frame
+  std::vector<std::string> scan_names;
+};
+
+// Reads a .mco model, a mesh (.ply with faces, .obj, .off, .stl, .vtp), or a
+// scan set (a .conf, range-grid .ply files, organized .pcd files; several
+// files are one set). Throws InputError naming the file and what was expected.
+ViewerInput load_viewer_input(const std::vector<std::string>& inputs);
+
+struct ViewerOptions {
+  int width = 1200, height = 800;  // window pixels
+  double percent = 100;            // first level shown
+  double compare_percent = 20;     // level in the split view's right half
+  // Where `s` saves: this path, or when it exists, NAME_2.png, NAME_3.png, ...
+  std::string screenshot = "scan2lod_view.png";
+  bool offscreen = false;          // render without showing a window (scripts, tests)
+};
+
+enum class DrawMode { shaded, wireframe, shaded_edges, points, vertex_colors };
+const char* draw_mode_name(DrawMode mode);
+
+// What the window shows now, read back from what VTK was given.
+struct ViewerState {
+  bool has_levels = false;           // a model: the slider is there
+  bool slider_by_triangles = false;  // the slider's unit
+  double slider_value = 0;
+  double percent = 100;              // of the LOD array, of the level shown
+  std::size_t priority = 0;
+  std::size_t triangles = 0;  // polygons in the displayed poly data
+  std::size_t vertices = 0;   // points in the displayed poly data
+  double extract_ms = 0;      // extract_lod + compact_lod of the last level change
+  double convert_ms = 0;      // plain mesh -> vtkPolyData
+  double render_ms = 0;       // the first render after the change: upload and draw
+  DrawMode mode = DrawMode::shaded;
+  bool cells = false;           // octree cells shown
+  std::size_t cell_count = 0;   // nodes of the cut drawn
+  bool split = false;
+  double compare_percent = 0;
+  std::size_t compare_triangles = 0;
+  bool scan_set = false;        // showing oriented points, not a mesh
+  bool normals = false;         // scan sets: normal glyphs shown
+  std::string overlay;          // the text in the window's corner
+  std::string last_screenshot;  // path of the last picture saved
+};
+
+class Viewer {
+ public:
+  // Builds the window, the actors and (for a model) the slider, at the level
+  // options.percent, with the camera framed on the whole object. Throws
+  // InputError without an X display (see require_display).
+  Viewer(ViewerInput input, const ViewerOptions& options);
+  ~Viewer();
+  Viewer(const Viewer&) = delete;
+  Viewer& operator=(const Viewer&) = delete;
+
+  vtkRenderWindowInteractor* interactor() const;
+  vtkSliderWidget* slider() const;  // null unless the input is a model
+  ViewerState state() const;
+
+  // Moves the slider to `value` (in its unit) the way a drag ends: the
+  // representation's value, then the widget's InteractionEvent; then renders.
+  void move_slider(double value);
+  // Sets the slider's unit (the `t` key toggles it).
+  void set_slider_by_triangles(bool by_triangles);
+  // Sends one key through the interactor (KeyPress, Char, KeyRelease) as X
+  // would: `keysym` is "o", "s", "Right", "bracketleft", ...; then renders.
+  void press_key(const std::string& keysym);
+  // Renders and saves the window as a PNG (atomically); returns the path.
+  // Empty `path`: the next free name after options.screenshot.
+  std::string screenshot(const std::string& path = "");
+  // Runs commands, one per line, printing the state after each to `log`:
+  //   percent P | triangles T | slider V | key KEYSYM | screenshot PATH | print
+  // Blank lines and lines starting with # are skipped. Throws InputError
+  // naming `source` and the line for anything else.
+  void run_script(std::istream& in, const std::string& source, std::ostream& log);
+  // Shows the window and runs the event loop until it is closed (or `q`).
+  void start();
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+// One line: "percent 20 priority 699 triangles 4976 vertices 2493 mode shaded ..."
+std::string describe(const ViewerState& state);
+
+}  // namespace scan2lod
