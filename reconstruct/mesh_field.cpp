@@ -1,7 +1,11 @@
 #include "reconstruct/mesh_field.h"
 
 #include "core/error.h"
-#include "reconstruct/marching_cubes.h"
+#include "core/flat_hash.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
 
 #include <open3d/core/Tensor.h>
 #include <open3d/t/geometry/RaycastingScene.h>
@@ -16,17 +20,41 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
   struct State {
     open3d::t::geometry::RaycastingScene scene;
     std::vector<Triangle> triangles;
-    std::vector<Vec3f> positions, normals;
+    // Angle-weighted pseudo-normals (Baerentzen & Aanaes 2005): the closest
+    // point's face, edge or vertex one signs the offset correctly wherever the
+    // surface is closed, which the scans' interpolated normals do not.
+    std::vector<Vec3f> face_normals, vertex_normals, edge_normals;
+    std::vector<std::array<std::int32_t, 3>> triangle_edges;  // edge k joins corners k and k+1
   };
   auto state = std::make_shared<State>();
-  state->positions = mesh.positions;
-  state->normals = mesh.normals.size() == mesh.positions.size() ? mesh.normals : vertex_normals(mesh);
   // Debian's Open3D asserts on zero-area triangles (ENVIRONMENT.md).
   for (const Triangle& t : mesh.triangles) {
     const Vec3f& a = mesh.positions[t[0]];
     if ((mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a).squaredNorm() > 0.f) state->triangles.push_back(t);
   }
   if (state->triangles.empty()) throw InputError("", "the mesh has no triangle with area to measure a distance to");
+  const std::size_t nt = state->triangles.size();
+  state->face_normals.resize(nt);
+  state->vertex_normals.assign(mesh.positions.size(), Vec3f::Zero());
+  state->triangle_edges.resize(nt);
+  FlatHashMap edge_index(nt * 3);
+  for (std::size_t t = 0; t < nt; ++t) {
+    const Triangle& tri = state->triangles[t];
+    const Vec3f n = (mesh.positions[tri[1]] - mesh.positions[tri[0]])
+                        .cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]).normalized();
+    state->face_normals[t] = n;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3f a = (mesh.positions[tri[(k + 1) % 3]] - mesh.positions[tri[k]]).normalized();
+      const Vec3f b = (mesh.positions[tri[(k + 2) % 3]] - mesh.positions[tri[k]]).normalized();
+      state->vertex_normals[tri[k]] += std::acos(std::clamp(a.dot(b), -1.f, 1.f)) * n;
+      const std::uint32_t lo = std::uint32_t(std::min(tri[k], tri[(k + 1) % 3]));
+      const std::uint32_t hi = std::uint32_t(std::max(tri[k], tri[(k + 1) % 3]));
+      const std::int32_t e = edge_index.insert((std::uint64_t(lo) << 32) | hi, std::int32_t(state->edge_normals.size()));
+      if (std::size_t(e) == state->edge_normals.size()) state->edge_normals.push_back(Vec3f::Zero());
+      state->edge_normals[std::size_t(e)] += n;
+      state->triangle_edges[t][k] = e;
+    }
+  }
   o3c::Tensor vertices = o3c::Tensor::Empty({std::int64_t(mesh.positions.size()), 3}, o3c::Float32);
   std::memcpy(vertices.GetDataPtr<float>(), mesh.positions.data(), mesh.positions.size() * sizeof(Vec3f));
   o3c::Tensor indices = o3c::Tensor::Empty({std::int64_t(state->triangles.size()), 3}, o3c::UInt32);
@@ -47,9 +75,21 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
 #pragma omp parallel for schedule(static)
     for (std::int64_t i = 0; i < std::int64_t(q.size()); ++i) {
       const Vec3f c(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
-      const Triangle& t = state->triangles[prim[i]];
-      const float u = uv[2 * i], v = uv[2 * i + 1];
-      const Vec3f n = (1.f - u - v) * state->normals[t[0]] + u * state->normals[t[1]] + v * state->normals[t[2]];
+      const std::uint32_t t = prim[i];
+      const Triangle& tri = state->triangles[t];
+      // Barycentric weights of the corners; a (near) zero one puts the closest
+      // point on the opposite edge, two put it on a corner.
+      const float w[3] = {1.f - uv[2 * i] - uv[2 * i + 1], uv[2 * i], uv[2 * i + 1]};
+      constexpr float kOnFeature = 1e-4f;
+      const int zeros = int(w[0] < kOnFeature) + int(w[1] < kOnFeature) + int(w[2] < kOnFeature);
+      Vec3f n = state->face_normals[t];
+      if (zeros >= 2) {
+        const int k = w[0] >= w[1] && w[0] >= w[2] ? 0 : w[1] >= w[2] ? 1 : 2;
+        n = state->vertex_normals[tri[k]];
+      } else if (zeros == 1) {
+        const int opposite = w[0] < kOnFeature ? 0 : w[1] < kOnFeature ? 1 : 2;
+        n = state->edge_normals[state->triangle_edges[t][(opposite + 1) % 3]];
+      }
       const Vec3f offset = q[std::size_t(i)] - c;
       (*d)[std::size_t(i)] = offset.dot(n) < 0.f ? -offset.norm() : offset.norm();
     }

@@ -9,9 +9,9 @@
 
 namespace scan2lod {
 
-// |p - c| signed by the side of c's smooth normal, where c is the closest point
-// of `mesh` (Open3D RaycastingScene); the normal is interpolated from the
-// vertex normals (mesh.normals, or area-weighted ones when empty).
+// |p - c| where c is the closest point of `mesh` (Open3D RaycastingScene),
+// signed by the angle-weighted pseudo-normal of the face, edge or vertex that
+// holds c: exact inside/outside wherever the mesh is closed and manifold.
 // Throws InputError when the mesh has no triangle with area.
 SignedDistanceField mesh_distance_field(const TriangleMesh& mesh);
 
