@@ -6,9 +6,63 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <queue>
 
 namespace scan2lod {
+namespace {
+
+// Nodes that expand before all others: the ancestors of every leaf on the full
+// mesh's rim and of every hole patch's rim, and, closed over the neighbour
+// rule, what they wait for. A coarse node there would span the rim (a sheet
+// past the open edge, seams with boundary edges) or hide a patch's hole; with
+// these expanded, levels keep the full mesh's boundary.
+template <class Dependencies>
+std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies& dependencies) {
+  const std::size_t n = tree.size();
+  auto edge_key = [](std::int32_t a, std::int32_t b) {
+    return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
+  };
+  FlatHashMap uses(tree.triangles.size() * 2);
+  auto count = [&](const Triangle& t) {
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t e = edge_key(t[k], t[(k + 1) % 3]);
+      const std::int32_t before = uses.find(e);
+      if (before < 0) uses.insert(e, 1);
+      else uses.assign(e, before + 1);
+    }
+  };
+  auto leaf_triangles = [&](std::size_t node) {
+    const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
+    return std::make_pair(first, first + tree.triangle_counts[node]);
+  };
+  for (std::size_t node = 0; node < n; ++node)
+    if (tree.is_leaf(node))
+      for (auto [t, end] = leaf_triangles(node); t != end; ++t) count(*t);
+  for (const Triangle& t : tree.patch_triangles) count(t);
+
+  std::vector<std::uint8_t> pinned(n, 0);
+  auto pin = [&](std::int32_t node) {
+    for (; node >= 0 && !pinned[node]; node = tree.parents[node]) pinned[node] = 1;
+  };
+  for (std::size_t node = 0; node < n; ++node) {
+    if (!tree.is_leaf(node) || tree.parents[node] < 0) continue;
+    for (auto [t, end] = leaf_triangles(node); t != end; ++t)
+      for (int k = 0; k < 3; ++k)
+        if (uses.find(edge_key((*t)[k], (*t)[(k + 1) % 3])) == 1) pin(tree.parents[node]);
+  }
+  for (std::int32_t node : tree.patch_needs) pin(node);
+  // Dependencies are coarser, so they sit at smaller indices: one pass from
+  // the deepest nodes up closes the set.
+  std::int32_t deps[26];
+  for (std::size_t node = n; node-- > 0;) {
+    if (!pinned[node] || tree.is_leaf(node)) continue;
+    for (int i = 0, all = dependencies(std::int32_t(node), deps); i < all; ++i) pin(deps[i]);
+  }
+  return pinned;
+}
+
+}  // namespace
 
 LodArray number_nodes(const McOctree& tree) {
   const std::size_t n = tree.size();
@@ -19,18 +73,12 @@ LodArray number_nodes(const McOctree& tree) {
   // deepest node above that cell (its parent if the cell has a node, else the
   // ancestor whose subtree has no surface there) must have expanded. The seed's
   // "marked or none" reads the same, with null nodes as real children.
-  std::vector<std::uint8_t> expanded(n, 0);
-  std::vector<std::int32_t> blocking(n, 0);
-  std::vector<std::vector<std::int32_t>> waiting(n);
-  using Entry = std::pair<float, std::int32_t>;
-  std::priority_queue<Entry> queue;
-  auto enter_cut = [&](std::int32_t node) {
-    if (tree.is_leaf(node)) return;
+  // The nodes above `node`'s 26 neighbour cells that must expand before it.
+  auto dependencies = [&](std::int32_t node, std::int32_t* deps) {
     const int level = tree.levels[node];
     int x, y, z;
     unpack_key(tree.keys[node], &x, &y, &z);
     const int side = 1 << level;
-    std::int32_t deps[26];
     int count = 0;
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
@@ -43,18 +91,36 @@ LodArray number_nodes(const McOctree& tree) {
             const std::int32_t a = at_level[l].find(pack_key(std::uint64_t(nx) >> s, std::uint64_t(ny) >> s,
                                                               std::uint64_t(nz) >> s));
             if (a < 0) continue;
-            if (!expanded[a] && std::find(deps, deps + count, a) == deps + count) deps[count++] = a;
+            if (std::find(deps, deps + count, a) == deps + count) deps[count++] = a;
             break;
           }
         }
+    return count;
+  };
+  const std::vector<std::uint8_t> pinned = pinned_nodes(tree, dependencies);
+  auto priority = [&](std::int32_t node) {
+    return pinned[node] ? std::numeric_limits<float>::infinity() : tree.metrics[node];
+  };
+
+  std::vector<std::uint8_t> expanded(n, 0);
+  std::vector<std::int32_t> blocking(n, 0);
+  std::vector<std::vector<std::int32_t>> waiting(n);
+  using Entry = std::pair<float, std::int32_t>;
+  std::priority_queue<Entry> queue;
+  auto enter_cut = [&](std::int32_t node) {
+    if (tree.is_leaf(node)) return;
+    std::int32_t deps[26];
+    int count = 0;
+    for (int i = 0, all = dependencies(node, deps); i < all; ++i)
+      if (!expanded[deps[i]]) deps[count++] = deps[i];
     blocking[node] = count;
     for (int i = 0; i < count; ++i) waiting[deps[i]].push_back(node);
-    if (count == 0) queue.push({tree.metrics[node], node});
+    if (count == 0) queue.push({priority(node), node});
   };
   auto expand = [&](std::int32_t node) {
     expanded[node] = 1;
     for (std::int32_t w : waiting[node])
-      if (--blocking[w] == 0) queue.push({tree.metrics[w], w});
+      if (--blocking[w] == 0) queue.push({priority(w), w});
     std::vector<std::int32_t>().swap(waiting[node]);
   };
 

@@ -5,6 +5,8 @@
 #include "reconstruct/cube_table.h"
 #include "reconstruct/mesh_field.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -76,6 +78,81 @@ class LatticeDistances {
   std::vector<float> values_;
 };
 
+double node_area(const McOctree& tree, std::size_t node) {
+  double area = 0.0;
+  for (std::int32_t t = 0; t < tree.triangle_counts[node]; ++t)
+    area += triangle_area(tree.positions, tree.triangles[std::size_t(tree.first_triangle[node] + t)]);
+  return area;
+}
+
+// The LOD metric of every node above the leaves (0 for leaves).
+void compute_metrics(LodMetric metric, McOctree* tree) {
+  const std::size_t n = tree->size();
+  std::vector<double> own(n);
+  for (std::size_t node = 0; node < n; ++node) own[node] = node_area(*tree, node);
+  tree->metrics.assign(n, 0.f);
+  if (metric == LodMetric::kAreaDifference) {
+    for (std::size_t node = 0; node < n; ++node) {
+      if (tree->is_leaf(node)) continue;
+      double children = 0.0;
+      for (int c = 0; c < tree->child_counts[node]; ++c) children += own[std::size_t(tree->first_child[node] + c)];
+      tree->metrics[node] = float(children - own[node]);
+    }
+    return;
+  }
+  // Area-weighted moments of the leaf triangles under each node (their
+  // centroids), summed bottom-up: parents come before children.
+  struct Moments {
+    double area = 0.0;
+    Eigen::Vector3d first = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+  };
+  std::vector<Moments> m(n);
+  const Eigen::Vector3d origin = tree->grid.origin;
+  for (std::size_t node = 0; node < n; ++node) {
+    if (!tree->is_leaf(node)) continue;
+    for (std::int32_t t = 0; t < tree->triangle_counts[node]; ++t) {
+      const Triangle& tri = tree->triangles[std::size_t(tree->first_triangle[node] + t)];
+      const double a = triangle_area(tree->positions, tri);
+      // Relative to the grid origin, so the second moments keep their digits.
+      const Eigen::Vector3d c = (tree->positions[tri[0]] + tree->positions[tri[1]] + tree->positions[tri[2]])
+                                    .cast<double>() / 3.0 - origin;
+      m[node].area += a;
+      m[node].first += a * c;
+      m[node].second += a * c * c.transpose();
+    }
+  }
+  for (std::size_t node = n; node-- > 1;) {
+    Moments& parent = m[std::size_t(tree->parents[node])];
+    parent.area += m[node].area;
+    parent.first += m[node].first;
+    parent.second += m[node].second;
+  }
+  // Deviation: area times the RMS distance of the leaf surface from its
+  // best-fitting plane (the smallest eigenvalue of the covariance), which is
+  // what a node's marching cube, with its vertices on that surface, cannot
+  // follow; plus the surface it adds or drops (a thin part it misses, a sheet
+  // the leaves lack) at a quarter of its size.
+  std::vector<double> deviation(n, 0.0);
+  for (std::size_t node = 0; node < n; ++node) {
+    if (tree->is_leaf(node) || m[node].area <= 0.0) continue;
+    const Eigen::Matrix3d covariance =
+        m[node].second - m[node].first * m[node].first.transpose() / m[node].area;
+    const double flatness = std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
+                                              covariance, Eigen::EigenvaluesOnly).eigenvalues()[0]);
+    const double size = tree->grid.cube_size * double(1 << (tree->depth - tree->levels[node]));
+    deviation[node] = std::sqrt(m[node].area * flatness) + 0.25 * std::fabs(m[node].area - own[node]) * size;
+  }
+  // Ranked by deviation per triangle the expansion brings.
+  for (std::size_t node = 0; node < n; ++node) {
+    if (tree->is_leaf(node)) continue;
+    int children = 0;
+    for (int c = 0; c < tree->child_counts[node]; ++c)
+      children += tree->triangle_counts[std::size_t(tree->first_child[node] + c)];
+    tree->metrics[node] = float(deviation[node] / double(std::max(1, children)));
+  }
+}
+
 // Groups the hole patches by hole (triangles joined by shared edges) and gives
 // each group the parents of the leaves along its rim.
 void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
@@ -143,7 +220,8 @@ void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
 
 }  // namespace
 
-McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field) {
+McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field,
+                         const OctreeOptions& options) {
   if (leaves.size() == 0) throw InputError("", "no leaf cube nodes: the reconstruction is empty");
   const int R = leaves.grid.resolution;
   int depth = 0;
@@ -372,17 +450,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     for (std::size_t i = 0; i < slots.size(); ++i) tree.sub_edge_vertices[slots[i].first][slots[i].second] = vertices[i];
   }
 
-  // Seed §5.2: the metric is the area the children add over the node's own.
-  std::vector<double> area(n, 0.0);
-  for (std::size_t node = 0; node < n; ++node)
-    for (std::int32_t t = 0; t < tree.triangle_counts[node]; ++t)
-      area[node] += triangle_area(tree.positions, tree.triangles[std::size_t(tree.first_triangle[node] + t)]);
-  for (std::size_t node = 0; node < n; ++node) {
-    if (tree.is_leaf(node)) continue;
-    double children = 0.0;
-    for (int c = 0; c < tree.child_counts[node]; ++c) children += area[std::size_t(tree.first_child[node] + c)];
-    tree.metrics[node] = float(children - area[node]);
-  }
+  compute_metrics(options.metric, &tree);
 
   // Added vertices take normals from the triangles around them, colours from
   // their neighbours.
@@ -444,8 +512,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   return tree;
 }
 
-McOctree build_mc_octree(const Reconstruction& reconstruction) {
-  return build_mc_octree(reconstruction.leaves, reconstruction.mesh, mesh_distance_field(reconstruction.mesh));
+McOctree build_mc_octree(const Reconstruction& reconstruction, const OctreeOptions& options) {
+  return build_mc_octree(reconstruction.leaves, reconstruction.mesh, mesh_distance_field(reconstruction.mesh), options);
 }
 
 }  // namespace scan2lod

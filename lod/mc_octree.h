@@ -43,7 +43,7 @@ struct McOctree {
   std::vector<std::array<std::int32_t, 12>> edge_vertices;  // vertex per crossed edge, else -1
   std::vector<std::int32_t> first_triangle;  // the node's own triangles: [first, first + count)
   std::vector<std::uint8_t> triangle_counts;
-  std::vector<float> metrics;  // seed §5.2: children's triangle area minus its own (0 for leaves)
+  std::vector<float> metrics;  // LOD metric (OctreeOptions::metric): larger expands first; 0 for leaves
 
   // Crack patching (lod/transition.h), for the nodes above the leaves, which
   // come first: indexed by node in [0, internal_nodes()).
@@ -72,18 +72,36 @@ struct McOctree {
   std::size_t patch_groups() const { return patch_group_first.empty() ? 0 : patch_group_first.size() - 1; }
 };
 
+// What orders the expansions (lod_array.h numbers nodes by it, largest first).
+enum class LodMetric {
+  // Seed §5.2: the area of the children's triangles minus the node's own.
+  // Blind to where the area goes: a curved coarse node whose children add
+  // little area stays coarse with its surface millimetres off (bench/lod).
+  kAreaDifference,
+  // The node's deviation from the leaves' surface under it, per triangle its
+  // expansion brings: area x RMS distance of those leaf triangles from their
+  // best-fitting plane, plus a quarter of the node's size per unit of area it
+  // adds or misses. Flat regions stay coarse, curved and thin ones refine.
+  kDeviation,
+};
+
+struct OctreeOptions {
+  LodMetric metric = LodMetric::kDeviation;
+};
+
 // Builds the octree over a reconstruction's leaf cube nodes and mesh.
 // @param[in] leaves  CubeNodes from reconstruct(); resolution a power of two
 // @param[in] mesh    the reconstruction's mesh (its vertices are the leaves')
 // @param[in] field   signed distance for lattice points the leaves lack
 // Throws InputError when there are no leaves.
-McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field);
+McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field,
+                         const OctreeOptions& options = {});
 
 // The octree of a reconstruction, the field being the signed distance to its
 // finished mesh (reconstruct/mesh_field.h): coarse levels then approximate the
 // mesh as delivered, without the pieces and holes that clean-up removed at the
 // leaves. (The scan points' own field re-grows them at coarse corners: the
 // bunny's coarse levels had 18-48 boundary loops with it, 3-13 with this.)
-McOctree build_mc_octree(const Reconstruction& reconstruction);
+McOctree build_mc_octree(const Reconstruction& reconstruction, const OctreeOptions& options = {});
 
 }  // namespace scan2lod
