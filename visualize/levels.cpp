@@ -26,6 +26,14 @@ Level LevelSource::at_priority(std::size_t priority) {
   return level;
 }
 
+const std::vector<Triangle>& LevelSource::triangles_at(std::size_t priority, double* seconds) {
+  assert(priority <= model_->lod.full());
+  const auto start = std::chrono::steady_clock::now();
+  extract_lod(model_->tree, model_->lod, priority, &scratch_, &triangles_);
+  if (seconds) *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return triangles_;
+}
+
 Level LevelSource::at_percent(double percent) {
   return at_priority(priority_for_percent(model_->lod, std::clamp(percent, 0.0, 100.0)));
 }

@@ -27,6 +27,11 @@ class LevelSource {
   explicit LevelSource(const LodModel& model) : model_(&model) {}
   // The level after `priority` expansions; priority must be <= lod.full().
   Level at_priority(std::size_t priority);
+  // Only the triangles of that level, as extract_lod gives them: indices into
+  // the model's tree.positions (valid until the next call). `seconds` gets
+  // the time of extract_lod. The viewer draws these against the model's whole
+  // vertex array, uploaded once, so a slider move sends only indices.
+  const std::vector<Triangle>& triangles_at(std::size_t priority, double* seconds);
   // priority_for_percent (percent clamped to [0, 100]), then at_priority.
   Level at_percent(double percent);
   // priority_for_triangles, then at_priority.

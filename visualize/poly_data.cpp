@@ -35,21 +35,23 @@ vtkSmartPointer<vtkPoints> points_of(const std::vector<Vec3f>& v) {
 
 }  // namespace
 
-vtkSmartPointer<vtkPolyData> mesh_to_poly_data(const TriangleMesh& mesh) {
-  auto poly = vtkSmartPointer<vtkPolyData>::New();
-  poly->SetPoints(points_of(mesh.positions));
-
+void set_triangles(vtkPolyData* poly, const std::vector<Triangle>& triangles) {
   auto offsets = vtkSmartPointer<vtkTypeInt32Array>::New();
-  offsets->SetNumberOfTuples(vtkIdType(mesh.triangles.size() + 1));
+  offsets->SetNumberOfTuples(vtkIdType(triangles.size() + 1));
   std::int32_t* o = offsets->GetPointer(0);
-  for (std::size_t i = 0; i <= mesh.triangles.size(); ++i) o[i] = std::int32_t(3 * i);
+  for (std::size_t i = 0; i <= triangles.size(); ++i) o[i] = std::int32_t(3 * i);
   auto connectivity = vtkSmartPointer<vtkTypeInt32Array>::New();
-  connectivity->SetNumberOfTuples(vtkIdType(3 * mesh.triangles.size()));
-  if (!mesh.triangles.empty())
-    std::memcpy(connectivity->GetPointer(0), mesh.triangles.data(), mesh.triangles.size() * sizeof(Triangle));
+  connectivity->SetNumberOfTuples(vtkIdType(3 * triangles.size()));
+  if (!triangles.empty()) std::memcpy(connectivity->GetPointer(0), triangles.data(), triangles.size() * sizeof(Triangle));
   auto polys = vtkSmartPointer<vtkCellArray>::New();
   polys->SetData(offsets, connectivity);
   poly->SetPolys(polys);
+}
+
+vtkSmartPointer<vtkPolyData> mesh_to_poly_data(const TriangleMesh& mesh) {
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points_of(mesh.positions));
+  set_triangles(poly, mesh.triangles);
 
   if (mesh.normals.size() == mesh.positions.size() && !mesh.normals.empty())
     poly->GetPointData()->SetNormals(float3(mesh.normals, "Normals"));

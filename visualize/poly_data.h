@@ -18,6 +18,11 @@ namespace scan2lod {
 // next to extraction (the slider benchmark, bench/viewer_bench.cpp).
 vtkSmartPointer<vtkPolyData> mesh_to_poly_data(const TriangleMesh& mesh);
 
+// Replaces the triangles of `poly` (whose points stay) by `triangles`, a
+// straight copy of the indices. The OpenGL mapper then re-sends only the
+// index buffer: the points, normals and colours are uploaded once.
+void set_triangles(vtkPolyData* poly, const std::vector<Triangle>& triangles);
+
 // Oriented points as poly data: one vertex cell per point, all in `color`.
 vtkSmartPointer<vtkPolyData> points_to_poly_data(const OrientedPoints& points, const Rgb& color);
 

@@ -173,6 +173,9 @@ struct Viewer::Impl {
   vtkSmartPointer<vtkSliderWidget> slider;
   vtkNew<vtkCallbackCommand> slider_moved;
   bool rendering_after_change = false;
+  vtkSmartPointer<vtkPolyData> level_poly;  // a model: all vertices, the level's triangles
+  std::vector<std::uint8_t> vertex_used;
+  std::size_t level_vertices = 0;
   Clock::time_point render_start;
 
   Impl(ViewerInput in, const ViewerOptions& o) : input(std::move(in)), options(o) {}
@@ -324,6 +327,14 @@ void Viewer::Impl::build() {
     } else {
       source.emplace(*input.model);
       state.has_levels = true;
+      // Every level's vertices, once: points, normals and colours for VTK.
+      TriangleMesh vertices;
+      vertices.positions = input.model->tree.positions;
+      vertices.normals = input.model->tree.normals;
+      vertices.colors = input.model->tree.colors;
+      level_poly = mesh_to_poly_data(vertices);
+      vertex_used.assign(vertices.positions.size(), 0);
+      mesh_mapper->SetInputData(level_poly);
       box = model_bounds(*input.model);
       const int depth = input.model->tree.depth;
       level_colors->SetNumberOfTableValues(depth + 1);
@@ -434,14 +445,25 @@ void Viewer::Impl::on_slider() {
 }
 
 void Viewer::Impl::show_level(std::size_t priority) {
-  const Level level = source->at_priority(priority);
+  // extract_lod alone: the triangles index the model's vertex array, which
+  // went to VTK (and the GPU) once, so only the indices change.
+  double seconds = 0;
+  const std::vector<Triangle>& triangles = source->triangles_at(priority, &seconds);
   const auto start = Clock::now();
-  vtkSmartPointer<vtkPolyData> poly = mesh_to_poly_data(level.mesh);
-  mesh_mapper->SetInputData(poly);
+  set_triangles(level_poly, triangles);
+  // Vertices the level uses, as compact_lod would keep them.
+  std::size_t used = 0;
+  for (const Triangle& t : triangles)
+    for (std::int32_t v : t)
+      if (!vertex_used[std::size_t(v)]) vertex_used[std::size_t(v)] = 1, ++used;
+  for (const Triangle& t : triangles)
+    for (std::int32_t v : t) vertex_used[std::size_t(v)] = 0;
+  level_vertices = used;
   state.convert_ms = ms_since(start);
-  state.extract_ms = level.extract_seconds * 1e3;
-  state.priority = level.priority;
-  state.percent = level.percent;
+  state.extract_ms = seconds * 1e3;
+  state.priority = priority;
+  const std::size_t full = input.model->lod.full();
+  state.percent = full ? 100.0 * double(priority) / double(full) : 100.0;
   rendering_after_change = true;
   if (state.cells) update_cells();
 }
@@ -490,7 +512,7 @@ void Viewer::Impl::update_overlay() {
   vtkPolyData* poly = mesh_mapper->GetInput();
   if (input.kind != ViewerInput::Kind::scans) {
     state.triangles = poly ? std::size_t(poly->GetNumberOfPolys()) : 0;
-    state.vertices = poly ? std::size_t(poly->GetNumberOfPoints()) : 0;
+    state.vertices = state.has_levels ? level_vertices : poly ? std::size_t(poly->GetNumberOfPoints()) : 0;
   }
   std::ostringstream text;
   char line[256];
