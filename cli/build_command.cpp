@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <map>
 #include <memory>
 
 namespace scan2lod::cli {
@@ -19,6 +20,7 @@ void add_build_command(CLI::App& app) {
     std::string output;
     ReconstructFlags flags;
     bool verbose = false;
+    LodMetric metric = LodMetric::kDeviation;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
@@ -28,6 +30,13 @@ void add_build_command(CLI::App& app) {
       ->required();
   cmd->add_option("-o,--output", args->output, "Output model (.mco)")->required();
   add_reconstruct_flags(cmd, &args->flags);
+  cmd->add_option("--metric", args->metric,
+                  "What orders the expansions: deviation (from the leaf surface, per triangle) or "
+                  "area (the seed's area difference)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, LodMetric>{{"deviation", LodMetric::kDeviation}, {"area", LodMetric::kAreaDifference}},
+          CLI::ignore_case))
+      ->default_str("deviation");
   cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each reconstruction stage");
   cmd->callback([args] {
     using clock = std::chrono::steady_clock;
@@ -46,7 +55,9 @@ void add_build_command(CLI::App& app) {
 
     stage = clock::now();
     LodModel model;
-    model.tree = build_mc_octree(r);
+    OctreeOptions octree;
+    octree.metric = args->metric;
+    model.tree = build_mc_octree(r, octree);
     model.lod = number_nodes(model.tree);
     const double octree_seconds = since(stage);
 
