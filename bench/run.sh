@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs the reconstruction benchmark from an existing build and prints its
 # markdown report (progress goes to stderr). Builds nothing.
+# bench/report.sh builds, runs both benchmarks and regenerates the README summary.
 #
 #   bench/run.sh [--build DIR] [--write] [benchmark options...]
 #

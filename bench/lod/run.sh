@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs the LOD benchmark from an existing build and prints its markdown report
 # (progress goes to stderr). Builds nothing.
+# bench/report.sh builds, runs both benchmarks and regenerates the README summary.
 #
 #   bench/lod/run.sh [--build DIR] [benchmark options...]
 #
