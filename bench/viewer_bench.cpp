@@ -5,7 +5,7 @@
 //   extract  extract_lod + compact_lod (LevelSource, as `scan2lod extract`)
 //   to VTK   the plain mesh copied into vtkPolyData
 //   render   the first render after the change: buffer upload plus drawing
-//   redraw   the same frame again, nothing changed: drawing alone
+//   redraw   the same frame again, nothing changed: drawing alone (best of 2)
 // so that upload ~ render - redraw. Needs an X display: run under xvfb-run.
 //
 //   xvfb-run -a build/bin/scan2lod_bench_viewer MODEL.mco [--size 1200x800] [--passes 3]
@@ -61,9 +61,12 @@ int main(int argc, char** argv) {
       viewer.move_slider(moves[i] == 100 ? 99.999 : moves[i]);  // every move a change
       viewer.move_slider(moves[i]);
       const scan2lod::ViewerState s = viewer.state();
-      const auto start = std::chrono::steady_clock::now();
-      viewer.interactor()->Render();
-      const double again = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      double again = 1e300;  // the quicker of two plain redraws: drawing alone
+      for (int k = 0; k < 2; ++k) {
+        const auto start = std::chrono::steady_clock::now();
+        viewer.interactor()->Render();
+        again = std::min(again, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      }
       extract.v.push_back(s.extract_ms);
       convert.v.push_back(s.convert_ms);
       render.v.push_back(s.render_ms);

@@ -17,6 +17,7 @@ void add_plot_command(CLI::App& app) {
   struct Args {
     std::string model, output, reference, percents = "1,2,5,10,20,30,40,50,60,70,80,90,100", size = "520x400";
     std::size_t samples = 20000;
+    bool linear = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("plot", "LOD metric and accumulation graphs of a .mco model -> PNG");
@@ -28,9 +29,11 @@ void add_plot_command(CLI::App& app) {
   cmd->add_option("--samples", args->samples, "Surface samples per direction and level for --reference")
       ->capture_default_str();
   cmd->add_option("--size", args->size, "Pixels per chart, WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_flag("--linear", args->linear, "The LOD metric chart on a linear axis (default: log)");
   cmd->callback([args] {
     PlotOptions options;
     parse_size(args->size, "--size", &options.chart_width, &options.chart_height);
+    options.log_metric = !args->linear;
     const std::vector<double> percents = parse_percent_list(args->percents, "--percent");
     check_png_output(args->output);
     require_display("plot");

@@ -125,13 +125,27 @@ PlotPicture write_lod_plots(const LodModel& model, const std::vector<LevelError>
     priority.push_back(double(i));
     metric.push_back(double(model.tree.metrics[std::size_t(lod.order[i])]));
   }
+  // The metric spans orders of magnitude (a few coarse nodes carry most of
+  // the area), so it goes on a log axis when enough of it is positive; values
+  // under 1e-8 of the largest (0, negative, float rounding) are drawn on
+  // that floor.
+  double largest = 0;
+  std::size_t positive = 0;
+  for (double m : metric) largest = std::max(largest, m), positive += m > 0;
+  const double floor = 1e-8 * largest;
+  const bool log_metric = options.log_metric && positive > metric.size() / 2;
+  std::vector<double> shown = metric;
+  if (log_metric)
+    for (double& m : shown) m = std::max(m, floor);
+  const char* metric_title = log_metric ? "LOD metric (area, log)" : "LOD metric (area)";
   vtkNew<vtkTable> metrics;
   metrics->AddColumn(column("priority", priority));
-  metrics->AddColumn(column("LOD metric", metric));
+  metrics->AddColumn(column("LOD metric", shown));
   vtkChartXY* a = chart_at(0, "LOD metric (Fig. 6.6)");
-  label(a, "LOD metric (Fig. 6.6)", "priority number", "LOD metric (area)");
+  label(a, "LOD metric (Fig. 6.6)", "priority number", metric_title);
   add_line(a, metrics, 1, kPlotBlue, 1.f);
-  pad_left_axis(a, metric);
+  if (log_metric) a->GetAxis(vtkAxis::LEFT)->SetLogScale(true);
+  else pad_left_axis(a, metric);
 
   // Fig. 6.7: its first priorities, where the order matters most.
   const std::size_t part = std::min(options.part, lod.full());

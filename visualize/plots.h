@@ -32,6 +32,9 @@ struct PlotOptions {
   int chart_width = 520;   // pixels per chart
   int chart_height = 400;
   std::size_t part = 300;  // priorities in the Fig. 6.7 close-up
+  // Fig. 6.6 on a log axis (when most metrics are positive; values under
+  // 1e-8 of the largest drawn at that floor). The close-up stays linear.
+  bool log_metric = true;
 };
 
 // Where each chart sits in the picture (pixels, origin top-left).
