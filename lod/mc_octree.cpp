@@ -40,9 +40,12 @@ double triangle_area(const std::vector<Vec3f>& p, const Triangle& t) {
 // the field elsewhere, each point evaluated once.
 class LatticeDistances {
  public:
-  LatticeDistances(const CubeNodes& leaves, const SignedDistanceField& field)
+  // `dropped[i]`: corner i's sign only shaped pieces that clean-up removed; the
+  // field decides it instead.
+  LatticeDistances(const CubeNodes& leaves, const SignedDistanceField& field, const std::vector<std::uint8_t>& dropped)
       : grid_(leaves.grid), field_(field), index_(leaves.corner_keys.size() * 2) {
     for (std::size_t i = 0; i < leaves.corner_keys.size(); ++i) {
+      if (dropped[i]) continue;
       index_.insert(leaves.corner_keys[i], std::int32_t(values_.size()));
       values_.push_back(leaves.corner_distances[i]);
     }
@@ -151,6 +154,57 @@ void compute_metrics(LodMetric metric, McOctree* tree) {
       children += tree->triangle_counts[std::size_t(tree->first_child[node] + c)];
     tree->metrics[node] = float(deviation[node] / double(std::max(1, children)));
   }
+}
+
+// Moves each centre vertex along its normal onto the field's zero set. A mean
+// of crossings on a curved surface lies inside the bend, and every fan to it
+// inherits that offset: on the bunny at R = 256 this cut the error of the
+// levels by a quarter to a third. Two steps; at most half the node's size, so
+// the apex stays over the node.
+void project_centres(const SignedDistanceField& field, McOctree* tree) {
+  std::vector<std::int32_t> nodes;
+  std::vector<Vec3f> at;
+  for (std::size_t node = 0; node < tree->internal_nodes(); ++node)
+    if (tree->centre_vertices[node] >= 0) nodes.push_back(std::int32_t(node));
+  std::vector<float> d;
+  std::vector<Vec3f> moved(nodes.size(), Vec3f::Zero());
+  for (int step = 0; step < 2; ++step) {
+    at.resize(nodes.size());
+    for (std::size_t i = 0; i < nodes.size(); ++i) at[i] = tree->positions[tree->centre_vertices[nodes[i]]];
+    field(at, &d);
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      if (std::isnan(d[i])) continue;
+      const std::int32_t v = tree->centre_vertices[nodes[i]];
+      const float limit = 0.5f * float(tree->grid.cube_size) * float(1 << (tree->depth - tree->levels[nodes[i]]));
+      Vec3f shift = moved[i] - d[i] * tree->normals[v];
+      if (shift.norm() > limit) shift *= limit / shift.norm();
+      tree->positions[v] += shift - moved[i];
+      moved[i] = shift;
+    }
+  }
+}
+
+// Leaf corners whose every crossing edge holds a vertex that no kept triangle
+// uses: inside-out specks around one lattice point (a speck of the scan's field
+// the clean-up dropped as a small piece). Coarse nodes that read such a corner's
+// sign would rebuild part of the speck, open, against leaves that emit none of
+// it: on the bunny at R = 256 that was most of the boundary loops levels had
+// beyond the full mesh's.
+std::vector<std::uint8_t> dropped_corners(const CubeNodes& leaves, const TriangleMesh& mesh) {
+  std::vector<std::uint8_t> used(mesh.positions.size(), 0);
+  for (const Triangle& t : mesh.triangles)
+    for (std::int32_t v : t) used[std::size_t(v)] = 1;
+  // Bit 0: the corner ends an edge whose vertex is unused; bit 1: a used one.
+  std::vector<std::uint8_t> seen(leaves.corner_keys.size(), 0);
+  for (std::size_t l = 0; l < leaves.size(); ++l)
+    for (int e = 0; e < 12; ++e) {
+      const std::int32_t v = leaves.edge_vertices[l][e];
+      if (v < 0) continue;
+      const std::uint8_t bit = used[std::size_t(v)] ? 2 : 1;
+      for (int end = 0; end < 2; ++end) seen[std::size_t(leaves.corners[l][edge_corner(e, end)])] |= bit;
+    }
+  for (std::uint8_t& s : seen) s = s == 1;
+  return seen;
 }
 
 // Groups the hole patches by hole (triangles joined by shared edges) and gives
@@ -289,7 +343,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
         edge_vertex.insert((lower << 2) | std::uint64_t(e / 4), leaves.edge_vertices[l][e]);
       }
 
-  LatticeDistances distances(leaves, field);
+  LatticeDistances distances(leaves, field, dropped_corners(leaves, mesh));
   const auto& table = cube_cases();
   const std::size_t first_new_vertex = tree.positions.size();
   // Coarse edges resolved so far, per level: (lower lattice corner << 2 | axis) -> vertex.
@@ -485,7 +539,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   group_patches(leaves.patch_triangles, &tree);
 
   // Each node above the leaves gets a centre vertex for its transition fans:
-  // the mean of its own crossings, or of its boundary's where it has none.
+  // the mean of its own crossings (of its boundary's where it has none), moved
+  // onto the surface below.
   tree.centre_vertices.assign(std::size_t(internal), -1);
   for (std::int32_t node = 0; node < internal; ++node) {
     Vec3f p = Vec3f::Zero(), nrm = Vec3f::Zero(), colour = Vec3f::Zero();
@@ -509,6 +564,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
       tree.colors.push_back(Rgb{std::uint8_t(c[0] + 0.5f), std::uint8_t(c[1] + 0.5f), std::uint8_t(c[2] + 0.5f)});
     }
   }
+  project_centres(field, &tree);
   return tree;
 }
 
