@@ -36,12 +36,11 @@ void add_plot_command(CLI::App& app) {
     options.log_metric = !args->linear;
     const std::vector<double> percents = parse_percent_list(args->percents, "--percent");
     check_png_output(args->output);
+    const LodModel model = load_model(args->model);  // file errors first, then the display
+    const TriangleMesh reference = args->reference.empty() ? TriangleMesh{} : read_mesh(args->reference);
     require_display("plot");
-
-    const LodModel model = load_model(args->model);
     std::vector<LevelError> errors;
     if (!args->reference.empty()) {
-      const TriangleMesh reference = read_mesh(args->reference);
       errors = level_errors(model, reference, percents, args->samples);
       std::printf("%6s %10s %10s %12s %12s\n", "LOD %", "priority", "triangles", "to ref %", "from ref %");
       for (const LevelError& e : errors)

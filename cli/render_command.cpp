@@ -37,9 +37,8 @@ void add_render_command(CLI::App& app) {
     options.azimuth = args->azimuth;
     options.elevation = args->elevation;
     check_png_output(args->output);
+    const LodModel model = load_model(args->model);  // file errors first, then the display
     require_display("render");
-
-    const LodModel model = load_model(args->model);
     const Montage m = render_montage(model, percents, options, args->output);
     std::printf("%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
     const std::size_t step = options.mode == RenderMode::both ? 2 : 1;

@@ -52,9 +52,9 @@ void add_view_command(CLI::App& app) {
     options.compare_percent = args->compare;
     options.screenshot = args->screenshot;
     options.offscreen = args->offscreen || !args->script.empty();
+    ViewerInput input = load_viewer_input(args->inputs);  // file errors first, then the display
     require_display("view");
-
-    Viewer viewer(load_viewer_input(args->inputs), options);
+    Viewer viewer(std::move(input), options);
     if (!args->script.empty()) {
       std::cout << describe(viewer.state()) << '\n';
       viewer.run_script(script, args->script, std::cout);
