@@ -137,7 +137,7 @@ PlotPicture write_lod_plots(const LodModel& model, const std::vector<LevelError>
   std::vector<double> shown = metric;
   if (log_metric)
     for (double& m : shown) m = std::max(m, floor);
-  const char* metric_title = log_metric ? "LOD metric (area, log)" : "LOD metric (area)";
+  const char* metric_title = log_metric ? "LOD metric (log)" : "LOD metric";
   vtkNew<vtkTable> metrics;
   metrics->AddColumn(column("priority", priority));
   metrics->AddColumn(column("LOD metric", shown));
@@ -154,7 +154,7 @@ PlotPicture write_lod_plots(const LodModel& model, const std::vector<LevelError>
   head->AddColumn(column("LOD metric", std::vector<double>(metric.begin(), metric.begin() + long(part))));
   const std::string part_title = "LOD metric, first " + std::to_string(part) + " (Fig. 6.7)";
   vtkChartXY* b = chart_at(1, part_title);
-  label(b, part_title, "priority number", "LOD metric (area)");
+  label(b, part_title, "priority number", "LOD metric");
   add_line(b, head, 1, kPlotBlue, 1.5f);
   pad_left_axis(b, std::vector<double>(metric.begin(), metric.begin() + long(part)));
 
