@@ -13,10 +13,11 @@ namespace scan2lod {
 namespace {
 
 // Nodes that expand before all others: the ancestors of every leaf on the full
-// mesh's rim and of every hole patch's rim, and, closed over the neighbour
-// rule, what they wait for. A coarse node there would span the rim (a sheet
-// past the open edge, seams with boundary edges) or hide a patch's hole; with
-// these expanded, levels keep the full mesh's boundary.
+// mesh's rim, of every hole patch's rim and of every node with a crossing the
+// leaves lack, and, closed over the neighbour rule, what they wait for. A
+// coarse node there would span the rim (a sheet past the open edge, seams with
+// boundary edges), hide a patch's hole or show surface the leaves do not have;
+// with these expanded, levels keep the full mesh's boundary.
 template <class Dependencies>
 std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies& dependencies) {
   const std::size_t n = tree.size();
@@ -52,6 +53,14 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
         if (uses.find(edge_key((*t)[k], (*t)[(k + 1) % 3])) == 1) pin(tree.parents[node]);
   }
   for (std::int32_t node : tree.patch_needs) pin(node);
+  // A crossing the leaves have no vertex for (mc_octree.cpp adds one) marks a
+  // coarse node whose signs see surface the leaves do not have.
+  std::int32_t first_centre = std::int32_t(tree.positions.size());
+  for (std::int32_t c : tree.centre_vertices)
+    if (c >= 0) first_centre = std::min(first_centre, c);
+  for (std::size_t node = 0; node < tree.internal_nodes(); ++node)
+    for (std::int32_t v : tree.edge_vertices[node])
+      if (v >= std::int32_t(tree.mesh_vertices) && v < first_centre) pin(std::int32_t(node));
   // Dependencies are coarser, so they sit at smaller indices: one pass from
   // the deepest nodes up closes the set.
   std::int32_t deps[26];
@@ -169,6 +178,8 @@ LodArray number_nodes(const McOctree& tree) {
       if (--patch_waiting[g] == 0) triangles += tree.patch_group_first[g + 1] - tree.patch_group_first[g];
     lod.accumulated.push_back(triangles);
   }
+  // The closure makes every pinned node expandable before any other.
+  while (lod.pinned < lod.order.size() && pinned[lod.order[lod.pinned]]) ++lod.pinned;
   return lod;
 }
 
@@ -176,7 +187,7 @@ std::vector<std::size_t> monotone_priorities(const LodArray& lod) {
   // Records of the running maximum, ending at full detail.
   std::vector<std::size_t> levels;
   std::int64_t best = -1;
-  for (std::size_t i = 0; i < lod.accumulated.size(); ++i)
+  for (std::size_t i = std::min(lod.pinned, lod.full()); i < lod.accumulated.size(); ++i)
     if (lod.accumulated[i] >= best) best = lod.accumulated[i], levels.push_back(i);
   const std::int64_t full = lod.accumulated.back();
   while (!levels.empty() && lod.accumulated[levels.back()] > full) levels.pop_back();
@@ -195,7 +206,9 @@ std::size_t snap(const std::vector<std::size_t>& levels, std::size_t priority) {
 
 std::size_t priority_for_percent(const LodArray& lod, double percent) {
   percent = std::clamp(percent, 0.0, 100.0);
-  return snap(monotone_priorities(lod), std::size_t(std::llround(percent / 100.0 * double(lod.full()))));
+  const std::size_t priority = std::size_t(std::llround(percent / 100.0 * double(lod.full())));
+  if (percent > 0.0 && priority <= lod.pinned) return std::min(lod.pinned, lod.full());
+  return snap(monotone_priorities(lod), priority);
 }
 
 std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles) {
@@ -203,6 +216,12 @@ std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles) 
   std::size_t best = 0;
   for (std::size_t level : monotone_priorities(lod))
     if (lod.accumulated[level] <= triangles) best = level;
+  if (best != 0 || lod.pinned == 0) return best;
+  // Below the smallest offered level: the largest that fits inside the pinned
+  // prefix, where the count still never decreases from one record to the next.
+  std::int64_t record = -1;
+  for (std::size_t i = 1; i < lod.pinned && lod.accumulated[i] <= triangles; ++i)
+    if (lod.accumulated[i] >= record && lod.accumulated[i] >= lod.accumulated[best]) record = lod.accumulated[i], best = i;
   return best;
 }
 

@@ -81,6 +81,7 @@ struct OutSection {
   std::uint32_t element_size;
   std::uint64_t count;
   const void* data;
+  std::uint32_t flags = kRequired;
 };
 
 template <class T>
@@ -145,6 +146,7 @@ std::vector<std::uint8_t> encode_model(const LodModel& model) {
   std::memcpy(grid.data() + 32, &resolution, 4);
   std::memcpy(grid.data() + 36, &depth, 4);
   put_u64(grid.data() + 40, std::uint64_t(t.mesh_vertices));
+  const std::uint64_t pinned = model.lod.pinned;
 
   const OutSection sections[] = {
       {fourcc("GRID"), std::uint32_t(kGridRecordBytes), 1, grid.data()},
@@ -172,6 +174,7 @@ std::vector<std::uint8_t> encode_model(const LodModel& model) {
       out("COLR", t.colors),
       out("LODO", model.lod.order),
       out("LODA", model.lod.accumulated),
+      {fourcc("PINC"), 8, 1, &pinned, 0},  // 1.1, optional: older readers offer levels inside it
   };
   const std::size_t count = sizeof sections / sizeof sections[0];
   const std::uint64_t directory_end = kHeaderBytes + kEntryBytes * count + 8;
@@ -195,7 +198,7 @@ std::vector<std::uint8_t> encode_model(const LodModel& model) {
     if (size) std::memcpy(bytes.data() + offset, s.data, size);
     std::uint8_t* e = bytes.data() + kHeaderBytes + kEntryBytes * i;
     put_u32(e, s.tag);
-    put_u32(e + 4, kRequired);
+    put_u32(e + 4, s.flags);
     put_u32(e + 8, s.element_size);
     put_u32(e + 12, 0);
     put_u64(e + 16, s.count);
@@ -315,7 +318,7 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
       fourcc("GRID"), fourcc("KEYS"), fourcc("LEVL"), fourcc("PRNT"), fourcc("FCHD"), fourcc("NCHD"), fourcc("CASE"),
       fourcc("EDGV"), fourcc("FTRI"), fourcc("NTRI"), fourcc("METR"), fourcc("BINS"), fourcc("SUBV"), fourcc("CNTR"),
       fourcc("NBRS"), fourcc("TRIS"), fourcc("PTRI"), fourcc("PGRP"), fourcc("PNDF"), fourcc("PNDS"), fourcc("POSN"),
-      fourcc("NRML"), fourcc("COLR"), fourcc("LODO"), fourcc("LODA")};
+      fourcc("NRML"), fourcc("COLR"), fourcc("LODO"), fourcc("LODA"), fourcc("PINC")};
   for (const Section& s : sections)
     if ((s.flags & kRequired) && std::find(std::begin(known), std::end(known), s.tag) == std::end(known))
       fail("needs section " + tag_name(s.tag) + ", which this scan2lod does not know (" + format + ", this reads " +
@@ -375,6 +378,12 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
   read("COLR", &t.colors);
   read("LODO", &model.lod.order);
   read("LODA", &model.lod.accumulated);
+  if (by_tag.count(fourcc("PINC"))) {  // format 1.1; 1.0 files pin nothing
+    std::vector<std::uint64_t> pinned;
+    read("PINC", &pinned);
+    if (pinned.size() != 1) fail("section 'PINC' must hold one count, not " + std::to_string(pinned.size()));
+    model.lod.pinned = std::size_t(std::min<std::uint64_t>(pinned[0], std::numeric_limits<std::size_t>::max()));
+  }
 
   // Contents: everything extraction indexes must be in range, and the tree a
   // tree, so that a crafted file cannot make it read out of bounds.
@@ -550,6 +559,8 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
   }
   for (std::size_t k = 0; k < lod.accumulated.size(); ++k)
     if (lod.accumulated[k] < 0) bad("accumulation table entry " + std::to_string(k) + " is negative");
+  if (lod.pinned > lod.order.size())
+    bad(std::to_string(lod.pinned) + " pinned expansions of " + std::to_string(lod.order.size()));
   return model;
 }
 

@@ -39,6 +39,9 @@
 //   PGRP i32, PNDF i32, PNDS i32           patch_group_first, patch_needs_first, patch_needs
 //   POSN f32[3], NRML f32[3], COLR u8[3]   vertices (NRML, COLR: 0 or POSN's count)
 //   LODO i32, LODA i64                     LodArray::order, ::accumulated
+// Added in 1.1, optional (a 1.0 reader skips it and may offer levels inside the
+// pinned prefix; a 1.1 reader of a 1.0 file takes 0):
+//   PINC u64, one                          LodArray::pinned
 // A new array is a new tag (in encode_model, the known list, decode_model's
 // reads and its checks). When older readers can still draw the model without
 // it, the writer marks it optional and bumps the minor version; otherwise it is
@@ -61,7 +64,7 @@ struct LodModel {
 };
 
 constexpr std::uint32_t kModelFormatMajor = 1;
-constexpr std::uint32_t kModelFormatMinor = 0;
+constexpr std::uint32_t kModelFormatMinor = 1;
 
 // Writes `model` to `path` (extension .mco) through a temporary file renamed
 // into place (write_atomically): a failure leaves nothing under `path`.

@@ -243,3 +243,27 @@ TEST(LodMetric, DeviationStaysCloserToTheFullMeshThanAreaDifference) {
     EXPECT_LT(deviation, 0.5 * area) << share;
   }
 }
+
+namespace {
+
+// Acceptance 3 of issue 3: no level opens a boundary the full mesh lacks.
+void expect_no_new_boundary_loops(const Model& m) {
+  std::vector<std::uint8_t> scratch;
+  std::vector<Triangle> tris;
+  extract_lod(m.tree, m.lod, m.lod.full(), &scratch, &tris);
+  const std::size_t full_loops = mesh_topology(compact_lod(m.tree, tris)).boundary_loops;
+  for (double percent : {1.0, 5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0}) {
+    extract_lod(m.tree, m.lod, priority_for_percent(m.lod, percent), &scratch, &tris);
+    const MeshTopology t = mesh_topology(compact_lod(m.tree, tris));
+    EXPECT_LE(t.boundary_loops, full_loops) << percent << "%";
+    EXPECT_EQ(t.non_manifold_edges, 0u) << percent << "%";
+  }
+}
+
+}  // namespace
+
+TEST(CrackPatching, BunnyLevelsOpenNoBoundaryTheFullMeshLacks) {
+  expect_no_new_boundary_loops(bunny64());
+  expect_no_new_boundary_loops(
+      build_model(load_oriented_points({std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf"}), 128));
+}

@@ -194,6 +194,8 @@ TEST(ModelFile, RoundTripKeepsEveryArrayAndEveryLevelOfDetail) {
   EXPECT_EQ(a.colors, b.colors);
   EXPECT_EQ(m.lod.order, l.lod.order);
   EXPECT_EQ(m.lod.accumulated, l.lod.accumulated);
+  EXPECT_GT(m.lod.pinned, 0u);
+  EXPECT_EQ(m.lod.pinned, l.lod.pinned);
 
   for (double percent : {0.0, 1.0, 10.0, 50.0, 100.0}) {
     const std::vector<Triangle> original = extract(m, percent), loaded = extract(l, percent);
@@ -416,4 +418,19 @@ TEST(ModelFile, WritesOnlyModelsIntoFoldersThatExist) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos);
   }
+}
+
+TEST(ModelFile, Format10FilesWithoutThePinnedCountStillLoad) {
+  // Format 1.0 had no 'PINC': such a file loads with nothing pinned, so every
+  // record of the accumulation table is offered again.
+  std::vector<RawSection> sections = split(bunny64_bytes());
+  const auto pinc = std::find_if(sections.begin(), sections.end(), [](const RawSection& s) { return s.tag == tag("PINC"); });
+  ASSERT_NE(pinc, sections.end());
+  EXPECT_EQ(pinc->flags, 0u);  // optional: a 1.0 reader skips it
+  sections.erase(pinc);
+  const std::vector<std::uint8_t> old = join(sections, 1, 0);
+  const LodModel l = decode_model(old.data(), old.size(), "old.mco");
+  EXPECT_EQ(l.lod.pinned, 0u);
+  EXPECT_EQ(l.lod.order, bunny64().lod.order);
+  EXPECT_LT(monotone_priorities(l.lod)[1], bunny64().lod.pinned);
 }
