@@ -20,7 +20,8 @@ struct TimedModel {
 };
 
 // reconstruct(points) at `resolution` with default options otherwise, then
-// build_mc_octree(reconstruction) and number_nodes(), as `scan2lod build`.
+// build_mc_octree(reconstruction) with default OctreeOptions and
+// number_nodes(), as `scan2lod build` without flags.
 TimedModel build_model_timed(const OrientedPoints& points, int resolution);
 
 }  // namespace scan2lod::bench
