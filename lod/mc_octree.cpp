@@ -117,12 +117,16 @@ void compute_metrics(LodMetric metric, McOctree* tree) {
     for (std::int32_t t = 0; t < tree->triangle_counts[node]; ++t) {
       const Triangle& tri = tree->triangles[std::size_t(tree->first_triangle[node] + t)];
       const double a = triangle_area(tree->positions, tri);
-      // Relative to the grid origin, so the second moments keep their digits.
-      const Eigen::Vector3d c = (tree->positions[tri[0]] + tree->positions[tri[1]] + tree->positions[tri[2]])
-                                    .cast<double>() / 3.0 - origin;
+      // Exact moments of the triangle's area (relative to the grid origin, so
+      // the second moments keep their digits): a lone leaf triangle tilted
+      // against its node's is not flat, as its centroid alone would say.
+      Eigen::Vector3d v[3];
+      for (int k = 0; k < 3; ++k) v[k] = tree->positions[tri[k]].cast<double>() - origin;
+      const Eigen::Vector3d sum = v[0] + v[1] + v[2];
       m[node].area += a;
-      m[node].first += a * c;
-      m[node].second += a * c * c.transpose();
+      m[node].first += a / 3.0 * sum;
+      m[node].second += a / 12.0 * (v[0] * v[0].transpose() + v[1] * v[1].transpose() + v[2] * v[2].transpose() +
+                                     sum * sum.transpose());
     }
   }
   for (std::size_t node = n; node-- > 1;) {
@@ -131,28 +135,51 @@ void compute_metrics(LodMetric metric, McOctree* tree) {
     parent.first += m[node].first;
     parent.second += m[node].second;
   }
-  // Deviation: area times the RMS distance of the leaf surface from its
-  // best-fitting plane (the smallest eigenvalue of the covariance), which is
-  // what a node's marching cube, with its vertices on that surface, cannot
-  // follow; plus the surface it adds or drops (a thin part it misses, a sheet
-  // the leaves lack) at a quarter of its size.
+  // Deviation: area times the RMS distance of the leaf surface from the plane of the node's own triangles, or from its
+  // best-fitting plane where the node has none; plus the surface the node adds
+  // or drops (a thin part it misses, a sheet the leaves lack) at a quarter of
+  // its size. The own plane sees a node whose cube is tilted or off the leaves
+  // as well as one over a bend: at 80 % of the bunny's triangles it halved the
+  // error that the best-fitting plane's residual alone left.
   std::vector<double> deviation(n, 0.0);
   for (std::size_t node = 0; node < n; ++node) {
-    if (tree->is_leaf(node) || m[node].area <= 0.0) continue;
-    const Eigen::Matrix3d covariance =
-        m[node].second - m[node].first * m[node].first.transpose() / m[node].area;
-    const double flatness = std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
-                                              covariance, Eigen::EigenvaluesOnly).eigenvalues()[0]);
+    const Moments& mm = m[node];
+    if (tree->is_leaf(node)) continue;
     const double size = tree->grid.cube_size * double(1 << (tree->depth - tree->levels[node]));
-    deviation[node] = std::sqrt(m[node].area * flatness) + 0.25 * std::fabs(m[node].area - own[node]) * size;
+    const double added = 0.25 * std::fabs(mm.area - own[node]) * size;
+    if (mm.area <= 0.0) {  // a sheet over leaves that emit nothing
+      deviation[node] = added;
+      continue;
+    }
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero(), centre = Eigen::Vector3d::Zero();
+    for (std::int32_t t = 0; t < tree->triangle_counts[node]; ++t) {
+      const Triangle& tri = tree->triangles[std::size_t(tree->first_triangle[node] + t)];
+      const Eigen::Vector3d a = tree->positions[tri[0]].cast<double>() - origin;
+      const Eigen::Vector3d b = tree->positions[tri[1]].cast<double>() - origin;
+      const Eigen::Vector3d c = tree->positions[tri[2]].cast<double>() - origin;
+      const Eigen::Vector3d area_normal = 0.5 * (b - a).cross(c - a);
+      normal += area_normal;
+      centre += area_normal.norm() * (a + b + c) / 3.0;
+    }
+    double squared;  // sum of area x squared distance
+    if (own[node] > 0.0 && normal.norm() > 0.0) {
+      const Eigen::Vector3d unit = normal.normalized();
+      const double offset = unit.dot(centre / own[node]);
+      squared = unit.dot(mm.second * unit) - 2.0 * offset * unit.dot(mm.first) + offset * offset * mm.area;
+    } else {
+      const Eigen::Matrix3d covariance = mm.second - mm.first * mm.first.transpose() / mm.area;
+      squared = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly).eigenvalues()[0];
+    }
+    deviation[node] = std::sqrt(mm.area * std::max(0.0, squared)) + added;
   }
-  // Ranked by deviation per triangle the expansion brings.
+  // Ranked by deviation per triangle the expansion adds.
   for (std::size_t node = 0; node < n; ++node) {
     if (tree->is_leaf(node)) continue;
     int children = 0;
     for (int c = 0; c < tree->child_counts[node]; ++c)
       children += tree->triangle_counts[std::size_t(tree->first_child[node] + c)];
-    tree->metrics[node] = float(deviation[node] / double(std::max(1, children)));
+    tree->metrics[node] =
+        float(deviation[node] / double(std::max(1, children - int(tree->triangle_counts[node]))));
   }
 }
 

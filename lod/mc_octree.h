@@ -79,9 +79,9 @@ enum class LodMetric {
   // little area stays coarse with its surface millimetres off (bench/lod).
   kAreaDifference,
   // The node's deviation from the leaves' surface under it, per triangle its
-  // expansion brings: area x RMS distance of those leaf triangles from their
-  // best-fitting plane, plus a quarter of the node's size per unit of area it
-  // adds or misses. Flat regions stay coarse, curved and thin ones refine.
+  // expansion adds: area x RMS distance of those leaf triangles from the
+  // plane of the node's own, plus a quarter of the node's size per unit of
+  // area it adds or misses. Flat regions stay coarse, curved and thin ones refine.
   kDeviation,
 };
 
