@@ -16,7 +16,8 @@ namespace scan2lod {
 void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,
                  std::vector<std::uint8_t>* expanded, std::vector<Triangle>* triangles);
 
-// Appends the triangles of one node of the cut, given which nodes are expanded:
+// Appends the triangles of one node of the cut, given which nodes are expanded
+// (bit 0 of their flag):
 // its own, or, beside expanded cells, its transition triangulation.
 void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
                std::vector<Triangle>* triangles);
