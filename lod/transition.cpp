@@ -77,7 +77,20 @@ const std::array<SubEdge, kSubEdges>& transition_sub_edges() { return tables().s
 
 int lattice_of_corner(int c) { return lattice((c & 1) * 2, ((c >> 1) & 1) * 2, ((c >> 2) & 1) * 2); }
 
-void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out) {
+namespace {
+
+// A transition's triangles as crossing slots (0..47 sub-edges, 48..59 node
+// edges, 60 the centre): they depend on the signs and refinement alone.
+constexpr int kCentreSlot = 60;
+constexpr int kMaxTransitionTriangles = 64;
+struct SlotTriangles {
+  std::uint64_t key = ~std::uint64_t(0);
+  std::uint8_t count = 0;
+  std::uint8_t slots[kMaxTransitionTriangles][3];
+};
+
+// Builds the slot triangles of one configuration.
+void transition_slots(const TransitionInput& in, SlotTriangles* result) {
   const Tables& T = tables();
   // Crossing slots: 0..47 sub-edges, 48..59 whole node edges.
   std::int8_t next[60];
@@ -121,7 +134,12 @@ void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* ou
       join(poly, m, T.face_reversed[f]);
     }
   }
-  auto vertex = [&](int s) { return s < kSubEdges ? in.sub_edge_vertices[s] : in.edge_vertices[s - kSubEdges]; };
+  result->count = 0;
+  auto add = [&](int a, int b, int c) {
+    if (result->count == kMaxTransitionTriangles) return;  // 60 crossings make at most 60 fan triangles
+    std::uint8_t* t = result->slots[result->count++];
+    t[0] = std::uint8_t(a), t[1] = std::uint8_t(b), t[2] = std::uint8_t(c);
+  };
   bool seen[60] = {};
   int loop[60];
   for (int start = 0; start < 60; ++start) {
@@ -134,10 +152,33 @@ void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* ou
     if (m == 2) continue;
     // Loops run clockwise around the outward normal (as in cube_table.cpp): emit reversed.
     if (m == 3) {
-      out->push_back({vertex(loop[0]), vertex(loop[2]), vertex(loop[1])});
+      add(loop[0], loop[2], loop[1]);
       continue;
     }
-    for (int k = 0; k < m; ++k) out->push_back({in.centre, vertex(loop[(k + 1) % m]), vertex(loop[k])});
+    for (int k = 0; k < m; ++k) add(kCentreSlot, loop[(k + 1) % m], loop[k]);
+  }
+}
+
+}  // namespace
+
+void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out) {
+  // Configurations repeat (a flat stretch of surface gives the same signs
+  // node after node), so each thread keeps the last one per hash slot.
+  constexpr std::size_t kCacheSlots = 1 << 13;
+  thread_local std::vector<SlotTriangles> cache(kCacheSlots);
+  const std::uint64_t key = std::uint64_t(in.inside & ((1u << 27) - 1)) | std::uint64_t(in.fine_faces & 63) << 27 |
+                            std::uint64_t(in.split_edges & 4095) << 33;
+  SlotTriangles& entry = cache[(key * 0x9E3779B97F4A7C15ull) >> (64 - 13)];
+  if (entry.key != key) {
+    transition_slots(in, &entry);
+    entry.key = key;
+  }
+  auto vertex = [&](int s) {
+    return s < kSubEdges ? in.sub_edge_vertices[s] : s < kCentreSlot ? in.edge_vertices[s - kSubEdges] : in.centre;
+  };
+  for (int i = 0; i < entry.count; ++i) {
+    const std::uint8_t* t = entry.slots[i];
+    out->push_back({vertex(t[0]), vertex(t[1]), vertex(t[2])});
   }
 }
 
