@@ -1,5 +1,7 @@
 #include "lod/extract.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 
@@ -28,6 +30,10 @@ const auto kEdgeCells = [] {
 
 // Marks in extract_lod's scratch: bit 0 expanded, bit 1 in the cut.
 constexpr std::uint8_t kExpanded = 1, kCut = 2;
+
+// Levels from this many expansions on are emitted by all cores.
+constexpr std::size_t kParallelFrom = 1024;
+constexpr int kChunks = 32;
 
 }  // namespace
 
@@ -77,8 +83,29 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
   // together, which made extraction up to 2x faster at levels with many
   // transitions; the scan over all node flags costs about as much as a copy.
   const std::size_t n = tree.size();
-  for (std::size_t node = 0; node < n; ++node)
-    if (flags[node] == kCut) emit(std::int32_t(node));
+  if (priority < kParallelFrom || omp_get_max_threads() < 2) {
+    for (std::size_t node = 0; node < n; ++node)
+      if (flags[node] == kCut) emit(std::int32_t(node));
+  } else {
+    // Chunks of the node range on every core, joined in order, so the output
+    // is the same as one thread's. Transitions sit in the first quarter (nodes
+    // above the leaves come first), hence many chunks, taken dynamically.
+    thread_local std::vector<std::vector<Triangle>> kept;  // capacity kept between calls
+    std::vector<std::vector<Triangle>>& parts = kept;       // this thread's, shared with the workers
+    parts.resize(kChunks);
+    const std::vector<std::uint8_t>& marks = *expanded;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int c = 0; c < kChunks; ++c) {
+      std::vector<Triangle>& part = parts[std::size_t(c)];
+      part.clear();
+      for (std::size_t node = n * std::size_t(c) / kChunks, end = n * std::size_t(c + 1) / kChunks; node < end; ++node)
+        if (marks[node] == kCut) emit_node(tree, std::int32_t(node), marks, &part);
+    }
+    std::size_t total = 0;
+    for (const auto& part : parts) total += part.size();
+    triangles->reserve(total);
+    for (const auto& part : parts) triangles->insert(triangles->end(), part.begin(), part.end());
+  }
   for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
     bool shown = true;
     for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1] && shown; ++k)
