@@ -37,29 +37,44 @@ constexpr int kChunks = 32;
 
 }  // namespace
 
-void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
-               std::vector<Triangle>* triangles) {
-  auto emit_own = [&] {
-    const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
-    triangles->insert(triangles->end(), first, first + tree.triangle_counts[node]);
-  };
-  if (std::size_t(node) >= tree.internal_nodes()) return emit_own();
+namespace {
+
+// The transition input of a node of the cut, or false when it emits its own
+// triangles (no finer node around it).
+bool transition_of(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
+                   TransitionInput* in) {
+  if (std::size_t(node) >= tree.internal_nodes()) return false;
   // A node beside expanded cells is triangulated against the finer nodes there.
   const auto& around = tree.neighbours[node];
   std::uint32_t fine = 0;
   for (int c = 0; c < 27; ++c)
     if (around[c] >= 0 && (expanded[around[c]] & kExpanded)) fine |= 1u << c;
   fine &= ~(1u << 13);  // the node itself
-  if (!fine) return emit_own();
+  if (!fine) return false;
   std::uint16_t edges = 0;
   for (int e = 0; e < 12; ++e)
     if (fine & kEdgeCells[e]) edges |= std::uint16_t(1u << e);
-  if (!edges) return emit_own();
+  if (!edges) return false;
   std::uint8_t faces = 0;
   for (int f = 0; f < 6; ++f) faces |= std::uint8_t((fine >> kFaceCell[f]) & 1) << f;
-  const TransitionInput in{tree.boundary_inside[node], tree.edge_vertices[node].data(),
-                           tree.sub_edge_vertices[node].data(), tree.centre_vertices[node], faces, edges};
-  triangulate_transition(in, triangles);
+  *in = TransitionInput{tree.boundary_inside[node], tree.edge_vertices[node].data(),
+                        tree.sub_edge_vertices[node].data(), tree.centre_vertices[node], faces, edges};
+  return true;
+}
+
+}  // namespace
+
+void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
+               std::vector<Triangle>* triangles) {
+  TransitionInput in;
+  if (transition_of(tree, node, expanded, &in)) return triangulate_transition(in, triangles);
+  const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
+  triangles->insert(triangles->end(), first, first + tree.triangle_counts[node]);
+}
+
+int node_triangle_count(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded) {
+  TransitionInput in;
+  return transition_of(tree, node, expanded, &in) ? transition_triangle_count(in) : tree.triangle_counts[node];
 }
 
 void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,

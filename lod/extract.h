@@ -22,6 +22,9 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
 void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
                std::vector<Triangle>* triangles);
 
+// How many triangles emit_node appends.
+int node_triangle_count(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded);
+
 // A self-contained mesh of those triangles: only the vertices they use, with
 // normals and colours.
 TriangleMesh compact_lod(const McOctree& tree, const std::vector<Triangle>& triangles);

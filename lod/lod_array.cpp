@@ -156,12 +156,7 @@ LodArray number_nodes(const McOctree& tree) {
   // node replaces its triangles by its children's and re-triangulates the
   // nodes of the cut beside it, whose transitions change.
   std::vector<std::int32_t> current(n, 0);  // triangles each cut node emits now
-  std::vector<Triangle> scratch;
-  auto count = [&](std::int32_t node) {
-    scratch.clear();
-    emit_node(tree, node, expanded, &scratch);
-    return std::int32_t(scratch.size());
-  };
+  auto count = [&](std::int32_t node) { return std::int32_t(node_triangle_count(tree, node, expanded)); };
   // Hole patches show once all the nodes around their rims have expanded.
   std::vector<std::int32_t> patch_waiting(tree.patch_groups());
   std::vector<std::vector<std::int32_t>> patches_of(n);

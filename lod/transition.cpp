@@ -159,11 +159,9 @@ void transition_slots(const TransitionInput& in, SlotTriangles* result) {
   }
 }
 
-}  // namespace
-
-void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out) {
-  // Configurations repeat (a flat stretch of surface gives the same signs
-  // node after node), so each thread keeps the last one per hash slot.
+// Configurations repeat (a flat stretch of surface gives the same signs node
+// after node), so each thread keeps the last one per hash slot.
+const SlotTriangles& cached_slots(const TransitionInput& in) {
   constexpr std::size_t kCacheSlots = 1 << 13;
   thread_local std::vector<SlotTriangles> cache(kCacheSlots);
   const std::uint64_t key = std::uint64_t(in.inside & ((1u << 27) - 1)) | std::uint64_t(in.fine_faces & 63) << 27 |
@@ -173,6 +171,15 @@ void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* ou
     transition_slots(in, &entry);
     entry.key = key;
   }
+  return entry;
+}
+
+}  // namespace
+
+int transition_triangle_count(const TransitionInput& in) { return cached_slots(in).count; }
+
+void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out) {
+  const SlotTriangles& entry = cached_slots(in);
   auto vertex = [&](int s) {
     return s < kSubEdges ? in.sub_edge_vertices[s] : s < kCentreSlot ? in.edge_vertices[s - kSubEdges] : in.centre;
   };

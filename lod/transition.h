@@ -48,4 +48,7 @@ struct TransitionInput {
 // Appends the node's triangles (outward, counter-clockwise) to `out`.
 void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out);
 
+// How many triangles triangulate_transition appends for `in`.
+int transition_triangle_count(const TransitionInput& in);
+
 }  // namespace scan2lod
