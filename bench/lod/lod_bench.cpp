@@ -67,6 +67,7 @@
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <meshoptimizer.h>
+#include <omp.h>
 #include <open3d/geometry/TriangleMesh.h>
 #include <open3d/utility/Logging.h>
 #include <vtkNew.h>
@@ -872,10 +873,14 @@ int main(int argc, char** argv) {
   info.expansions = model.lod.full();
   for (std::size_t n = 0; n < model.tree.size(); ++n) info.leaves += model.tree.is_leaf(n);
 
-  // The levels, and the full mesh every peer starts from (pure code: no OpenMP).
+  // The levels, and the full mesh every peer starts from, on one thread:
+  // extract_lod runs big levels on an OpenMP team otherwise, and the parent
+  // must not start libgomp's pool before its last fork.
   std::vector<Level> levels;
   TriangleMesh full;
   {
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(1);
     std::vector<std::uint8_t> expanded;
     std::vector<Triangle> triangles;
     for (const double p : percents) {
@@ -895,6 +900,7 @@ int main(int argc, char** argv) {
       extract_lod(model.tree, model.lod, model.lod.full(), &expanded, &triangles);
       full = compact_lod(model.tree, triangles);
     }
+    omp_set_num_threads(threads);  // for the children; no thread has started here
   }
   info.full_triangles = full.triangles.size();
   info.full_vertices = full.positions.size();
