@@ -24,13 +24,9 @@ CliRun run(const std::string& args, bool merge_stderr = true) {
   return scan2lod::testing::run_cli(args, merge_stderr);
 }
 
-fs::path scratch() {
-  const fs::path dir = scan2lod::testing::scratch_folder() / "lod_cli";
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path scratch() { return scan2lod::testing::scratch_folder("lod_cli"); }
 
-const std::string kScans = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf";
+const std::string kScans = scan2lod::testing::bunny_scans();
 
 // The bunny at R = 64, built once by `scan2lod build`.
 const fs::path& bunny_model() {

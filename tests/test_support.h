@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -44,5 +45,21 @@ inline std::filesystem::path scratch_folder() {
   std::filesystem::create_directories(folder.path);
   return folder.path;
 }
+
+// A named folder inside it, for one test file's outputs.
+inline std::filesystem::path scratch_folder(const std::string& name) {
+  const std::filesystem::path dir = scratch_folder() / name;
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// Whether there is an X display to render on (tests run under xvfb-run).
+inline bool have_display() {
+  const char* d = std::getenv("DISPLAY");
+  return d && *d;
+}
+
+// The bundled bunny scans' .conf.
+inline std::string bunny_scans() { return std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf"; }
 
 }  // namespace scan2lod::testing

@@ -35,18 +35,11 @@ namespace {
 
 using scan2lod::testing::CliRun;
 
-fs::path scratch() {
-  const fs::path dir = scan2lod::testing::scratch_folder() / "viewer";
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path scratch() { return scan2lod::testing::scratch_folder("viewer"); }
 
-bool have_display() {
-  const char* d = std::getenv("DISPLAY");
-  return d && *d;
-}
+using scan2lod::testing::have_display;
 
-const std::string kScans = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf";
+const std::string kScans = scan2lod::testing::bunny_scans();
 
 const fs::path& bunny_model() {
   static const fs::path path = [] {
