@@ -58,9 +58,13 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
   std::int32_t first_centre = std::int32_t(tree.positions.size());
   for (std::int32_t c : tree.centre_vertices)
     if (c >= 0) first_centre = std::min(first_centre, c);
-  for (std::size_t node = 0; node < tree.internal_nodes(); ++node)
-    for (std::int32_t v : tree.edge_vertices[node])
-      if (v >= std::int32_t(tree.mesh_vertices) && v < first_centre) pin(std::int32_t(node));
+  auto added = [&](std::int32_t v) { return v >= std::int32_t(tree.mesh_vertices) && v < first_centre; };
+  for (std::size_t node = 0; node < tree.internal_nodes(); ++node) {
+    bool lacking = false;
+    for (std::int32_t v : tree.edge_vertices[node]) lacking = lacking || added(v);
+    for (std::int32_t v : tree.sub_edge_vertices[node]) lacking = lacking || added(v);  // its transitions'
+    if (lacking) pin(std::int32_t(node));
+  }
   // Dependencies are coarser, so they sit at smaller indices: one pass from
   // the deepest nodes up closes the set.
   std::int32_t deps[26];
