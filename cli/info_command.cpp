@@ -73,6 +73,7 @@ void add_info_command(CLI::App& app) {
                                 {"nodes_per_level", per_level},
                                 {"leaves", leaves},
                                 {"expansions", model.lod.full()},
+                                {"pinned", model.lod.pinned},
                                 {"levels_of_detail", levels}};
       std::printf("%s\n", j.dump(2).c_str());
       return;
@@ -84,6 +85,10 @@ void add_info_command(CLI::App& app) {
                 t.grid.cube_size, t.grid.origin.x(), t.grid.origin.y(), t.grid.origin.z());
     std::printf("%zu nodes, %zu leaves, %zu expansions; nodes per level:", t.size(), leaves, model.lod.full());
     for (std::size_t c : per_level) std::printf(" %zu", c);
+    if (model.lod.pinned)
+      std::printf("\nthe first %zu expansions (%lld triangles) keep the rim at full detail: no level is offered "
+                  "inside them",
+                  model.lod.pinned, static_cast<long long>(model.lod.accumulated[model.lod.pinned]));
     std::printf("\n\n%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
     for (const LevelOfDetail& l : lods)
       std::printf("%6g %10zu %10zu %10zu\n", l.percent, l.priority, l.triangles, l.vertices);
