@@ -367,6 +367,7 @@ TEST(ModelFile, CraftedContentsAreRejectedBeforeExtraction) {
       {"an accumulation table too short", "accumulation table", [](LodModel& l) { l.lod.accumulated.pop_back(); }},
       {"a resolution that is not 2^depth", "resolution", [](LodModel& l) { l.tree.grid.resolution = 100; }},
       {"mesh_vertices past the vertices", "mesh_vertices", [](LodModel& l) { l.tree.mesh_vertices = 1u << 30; }},
+      {"a pinned prefix past the LOD array", "pinned expansions", [](LodModel& l) { l.lod.pinned = l.lod.order.size() + 1; }},
   };
   for (const Case& c : cases) {
     LodModel crafted = m;
