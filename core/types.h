@@ -10,6 +10,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace scan2lod {
@@ -18,6 +19,13 @@ using Vec3f = Eigen::Vector3f;
 using Vec3d = Eigen::Vector3d;
 using Rgb = std::array<std::uint8_t, 3>;
 using Triangle = std::array<std::int32_t, 3>;
+
+// The key of the undirected edge between vertices a and b (either order):
+// meshes are joined and counted edge by edge in flat hash maps and sorted lists.
+inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
+}
 
 // One range image in its own scan frame: a cols x rows lattice of samples, NaN where
 // the scanner had no return. The scanner sits on the +z side of the frame.

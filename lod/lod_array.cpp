@@ -21,9 +21,6 @@ namespace {
 template <class Dependencies>
 std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies& dependencies) {
   const std::size_t n = tree.size();
-  auto edge_key = [](std::int32_t a, std::int32_t b) {
-    return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
-  };
   FlatHashMap uses(tree.triangles.size() * 2);
   auto count = [&](const Triangle& t) {
     for (int k = 0; k < 3; ++k) {

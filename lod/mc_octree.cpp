@@ -282,9 +282,6 @@ void fit_centres(McOctree* tree) {
 // Groups the hole patches by hole (triangles joined by shared edges) and gives
 // each group the parents of the leaves along its rim.
 void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
-  auto key = [](std::int32_t a, std::int32_t b) {
-    return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
-  };
   tree->patch_triangles.clear();
   tree->patch_group_first = {0};
   tree->patch_needs_first = {0};
@@ -293,7 +290,7 @@ void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
   // Edge -> patch triangles (up to 2) and edge -> leaf node.
   std::vector<std::pair<std::uint64_t, std::int32_t>> patch_edges;
   for (std::size_t t = 0; t < patches.size(); ++t)
-    for (int k = 0; k < 3; ++k) patch_edges.push_back({key(patches[t][k], patches[t][(k + 1) % 3]), std::int32_t(t)});
+    for (int k = 0; k < 3; ++k) patch_edges.push_back({edge_key(patches[t][k], patches[t][(k + 1) % 3]), std::int32_t(t)});
   std::sort(patch_edges.begin(), patch_edges.end());
   std::vector<std::int32_t> group(patches.size());
   std::iota(group.begin(), group.end(), 0);
@@ -319,7 +316,7 @@ void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
       for (std::int32_t t = 0; t < tree->triangle_counts[node]; ++t) {
         const Triangle& tri = tree->triangles[std::size_t(tree->first_triangle[node] + t)];
         for (int k = 0; k < 3; ++k) {
-          const std::uint64_t e = key(tri[k], tri[(k + 1) % 3]);
+          const std::uint64_t e = edge_key(tri[k], tri[(k + 1) % 3]);
           if (std::binary_search(sorted_rim.begin(), sorted_rim.end(), e)) edge_leaf.insert(e, std::int32_t(node));
         }
       }

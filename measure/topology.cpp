@@ -36,11 +36,6 @@ class DisjointSets {
 
 bool collapsed(const Triangle& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
 
-std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  if (a > b) std::swap(a, b);
-  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
-}
-
 }  // namespace
 
 void check_triangle_indices(const TriangleMesh& mesh) {

@@ -7,10 +7,6 @@
 namespace scan2lod {
 namespace {
 
-std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
-}
-
 // Minimum-area triangulation of the polygon loop[0..n) (dynamic programming
 // over polygon triangulations, O(n^3)). Triangles are written reversed to the
 // loop, which runs along the existing triangles' half-edges.

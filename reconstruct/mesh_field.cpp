@@ -47,9 +47,7 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
       const Vec3f a = (mesh.positions[tri[(k + 1) % 3]] - mesh.positions[tri[k]]).normalized();
       const Vec3f b = (mesh.positions[tri[(k + 2) % 3]] - mesh.positions[tri[k]]).normalized();
       state->vertex_normals[tri[k]] += std::acos(std::clamp(a.dot(b), -1.f, 1.f)) * n;
-      const std::uint32_t lo = std::uint32_t(std::min(tri[k], tri[(k + 1) % 3]));
-      const std::uint32_t hi = std::uint32_t(std::max(tri[k], tri[(k + 1) % 3]));
-      const std::int32_t e = edge_index.insert((std::uint64_t(lo) << 32) | hi, std::int32_t(state->edge_normals.size()));
+      const std::int32_t e = edge_index.insert(edge_key(tri[k], tri[(k + 1) % 3]), std::int32_t(state->edge_normals.size()));
       if (std::size_t(e) == state->edge_normals.size()) state->edge_normals.push_back(Vec3f::Zero());
       state->edge_normals[std::size_t(e)] += n;
       state->triangle_edges[t][k] = e;
