@@ -32,10 +32,6 @@ std::uint64_t corner_lattice_key(std::uint64_t key, int shift, int c) {
                   (std::uint64_t(z) << shift) + ((c >> 2) & 1) * size);
 }
 
-double triangle_area(const std::vector<Vec3f>& p, const Triangle& t) {
-  return 0.5 * double((p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).norm());
-}
-
 // Signed distances on the leaf lattice: the leaves' own where they have them,
 // the field elsewhere, each point evaluated once.
 class LatticeDistances {
@@ -81,105 +77,120 @@ class LatticeDistances {
   std::vector<float> values_;
 };
 
-double node_area(const McOctree& tree, std::size_t node) {
+// The edge length of a node's cube.
+double node_size(const McOctree& tree, std::size_t node) {
+  return tree.grid.cube_size * double(1 << (tree.depth - tree.levels[node]));
+}
+
+// A triangle's corners relative to the grid origin, in double: sums of second
+// moments over thousands of triangles keep their digits.
+std::array<Eigen::Vector3d, 3> corners_of(const McOctree& tree, const Triangle& t) {
+  const Eigen::Vector3d origin = tree.grid.origin;
+  return {tree.positions[t[0]].cast<double>() - origin, tree.positions[t[1]].cast<double>() - origin,
+          tree.positions[t[2]].cast<double>() - origin};
+}
+
+// Sums over the leaf triangles under each node, bottom-up.
+struct LeafSums {
   double area = 0.0;
-  for (std::int32_t t = 0; t < tree.triangle_counts[node]; ++t)
-    area += triangle_area(tree.positions, tree.triangles[std::size_t(tree.first_triangle[node] + t)]);
-  return area;
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();   // exact area moments
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d planes = Eigen::Matrix3d::Zero();  // their planes' quadric: sum of a n n^T
+  Eigen::Vector3d offsets = Eigen::Vector3d::Zero();  // and of a n (n . p)
+};
+
+std::vector<LeafSums> leaf_sums(const McOctree& tree) {
+  const std::size_t n = tree.size();
+  std::vector<LeafSums> sums(n);
+  for (std::size_t node = 0; node < n; ++node) {
+    if (!tree.is_leaf(node)) continue;
+    for (std::int32_t t = 0; t < tree.triangle_counts[node]; ++t) {
+      const auto v = corners_of(tree, tree.triangles[std::size_t(tree.first_triangle[node] + t)]);
+      const Eigen::Vector3d area_normal = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]);
+      const double a = area_normal.norm();
+      if (a <= 0.0) continue;
+      const Eigen::Vector3d sum = v[0] + v[1] + v[2], unit = area_normal / a;
+      LeafSums& s = sums[node];
+      s.area += a;
+      s.first += a / 3.0 * sum;
+      s.second += a / 12.0 * (v[0] * v[0].transpose() + v[1] * v[1].transpose() + v[2] * v[2].transpose() +
+                              sum * sum.transpose());
+      s.planes += a * unit * unit.transpose();
+      s.offsets += a * unit * unit.dot(v[0]);
+    }
+  }
+  for (std::size_t node = n; node-- > 1;) {  // parents come before children
+    LeafSums& parent = sums[std::size_t(tree.parents[node])];
+    parent.area += sums[node].area;
+    parent.first += sums[node].first;
+    parent.second += sums[node].second;
+    parent.planes += sums[node].planes;
+    parent.offsets += sums[node].offsets;
+  }
+  return sums;
+}
+
+// A node's own triangles: their area, and the sums of their area normals and of
+// their area-weighted centroids (relative to the grid origin).
+struct OwnSurface {
+  double area = 0.0;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero(), centre = Eigen::Vector3d::Zero();
+};
+
+OwnSurface own_surface(const McOctree& tree, std::size_t node) {
+  OwnSurface own;
+  for (std::int32_t t = 0; t < tree.triangle_counts[node]; ++t) {
+    const auto v = corners_of(tree, tree.triangles[std::size_t(tree.first_triangle[node] + t)]);
+    const Eigen::Vector3d area_normal = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]);
+    own.area += area_normal.norm();
+    own.normal += area_normal;
+    own.centre += area_normal.norm() * (v[0] + v[1] + v[2]) / 3.0;
+  }
+  return own;
 }
 
 // The LOD metric of every node above the leaves (0 for leaves).
-void compute_metrics(LodMetric metric, McOctree* tree) {
+void compute_metrics(LodMetric metric, const std::vector<LeafSums>& sums, McOctree* tree) {
   const std::size_t n = tree->size();
-  std::vector<double> own(n);
-  for (std::size_t node = 0; node < n; ++node) own[node] = node_area(*tree, node);
   tree->metrics.assign(n, 0.f);
   if (metric == LodMetric::kAreaDifference) {
     for (std::size_t node = 0; node < n; ++node) {
       if (tree->is_leaf(node)) continue;
       double children = 0.0;
-      for (int c = 0; c < tree->child_counts[node]; ++c) children += own[std::size_t(tree->first_child[node] + c)];
-      tree->metrics[node] = float(children - own[node]);
+      for (int c = 0; c < tree->child_counts[node]; ++c)
+        children += own_surface(*tree, std::size_t(tree->first_child[node] + c)).area;
+      tree->metrics[node] = float(children - own_surface(*tree, node).area);
     }
     return;
   }
-  // Area-weighted moments of the leaf triangles under each node (their
-  // centroids), summed bottom-up: parents come before children.
-  struct Moments {
-    double area = 0.0;
-    Eigen::Vector3d first = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
-  };
-  std::vector<Moments> m(n);
-  const Eigen::Vector3d origin = tree->grid.origin;
-  for (std::size_t node = 0; node < n; ++node) {
-    if (!tree->is_leaf(node)) continue;
-    for (std::int32_t t = 0; t < tree->triangle_counts[node]; ++t) {
-      const Triangle& tri = tree->triangles[std::size_t(tree->first_triangle[node] + t)];
-      const double a = triangle_area(tree->positions, tri);
-      // Exact moments of the triangle's area (relative to the grid origin, so
-      // the second moments keep their digits): a lone leaf triangle tilted
-      // against its node's is not flat, as its centroid alone would say.
-      Eigen::Vector3d v[3];
-      for (int k = 0; k < 3; ++k) v[k] = tree->positions[tri[k]].cast<double>() - origin;
-      const Eigen::Vector3d sum = v[0] + v[1] + v[2];
-      m[node].area += a;
-      m[node].first += a / 3.0 * sum;
-      m[node].second += a / 12.0 * (v[0] * v[0].transpose() + v[1] * v[1].transpose() + v[2] * v[2].transpose() +
-                                     sum * sum.transpose());
-    }
-  }
-  for (std::size_t node = n; node-- > 1;) {
-    Moments& parent = m[std::size_t(tree->parents[node])];
-    parent.area += m[node].area;
-    parent.first += m[node].first;
-    parent.second += m[node].second;
-  }
-  // Deviation: area times the RMS distance of the leaf surface from the plane of the node's own triangles, or from its
-  // best-fitting plane where the node has none; plus the surface the node adds
-  // or drops (a thin part it misses, a sheet the leaves lack) at a quarter of
-  // its size. The own plane sees a node whose cube is tilted or off the leaves
-  // as well as one over a bend: at 80 % of the bunny's triangles it halved the
-  // error that the best-fitting plane's residual alone left.
-  std::vector<double> deviation(n, 0.0);
-  for (std::size_t node = 0; node < n; ++node) {
-    const Moments& mm = m[node];
-    if (tree->is_leaf(node)) continue;
-    const double size = tree->grid.cube_size * double(1 << (tree->depth - tree->levels[node]));
-    const double added = 0.25 * std::fabs(mm.area - own[node]) * size;
-    if (mm.area <= 0.0) {  // a sheet over leaves that emit nothing
-      deviation[node] = added;
-      continue;
-    }
-    Eigen::Vector3d normal = Eigen::Vector3d::Zero(), centre = Eigen::Vector3d::Zero();
-    for (std::int32_t t = 0; t < tree->triangle_counts[node]; ++t) {
-      const Triangle& tri = tree->triangles[std::size_t(tree->first_triangle[node] + t)];
-      const Eigen::Vector3d a = tree->positions[tri[0]].cast<double>() - origin;
-      const Eigen::Vector3d b = tree->positions[tri[1]].cast<double>() - origin;
-      const Eigen::Vector3d c = tree->positions[tri[2]].cast<double>() - origin;
-      const Eigen::Vector3d area_normal = 0.5 * (b - a).cross(c - a);
-      normal += area_normal;
-      centre += area_normal.norm() * (a + b + c) / 3.0;
-    }
-    double squared;  // sum of area x squared distance
-    if (own[node] > 0.0 && normal.norm() > 0.0) {
-      const Eigen::Vector3d unit = normal.normalized();
-      const double offset = unit.dot(centre / own[node]);
-      squared = unit.dot(mm.second * unit) - 2.0 * offset * unit.dot(mm.first) + offset * offset * mm.area;
-    } else {
-      const Eigen::Matrix3d covariance = mm.second - mm.first * mm.first.transpose() / mm.area;
-      squared = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly).eigenvalues()[0];
-    }
-    deviation[node] = std::sqrt(mm.area * std::max(0.0, squared)) + added;
-  }
-  // Ranked by deviation per triangle the expansion adds.
+  // Deviation: area times the RMS distance of the leaf surface from the plane
+  // of the node's own triangles, or from its best-fitting plane where the node
+  // has none; plus the surface the node adds or drops (a thin part it misses, a
+  // sheet the leaves lack) at a quarter of its size. The own plane sees a node
+  // whose cube is tilted or off the leaves as well as one over a bend: at 80 %
+  // of the bunny's triangles it halved the error that the best-fitting plane's
+  // residual alone left. Ranked per triangle the expansion adds.
   for (std::size_t node = 0; node < n; ++node) {
     if (tree->is_leaf(node)) continue;
+    const LeafSums& leaf = sums[node];
+    const OwnSurface own = own_surface(*tree, node);
+    double deviation = 0.25 * std::fabs(leaf.area - own.area) * node_size(*tree, node);
+    if (leaf.area > 0.0) {  // else a sheet over leaves that emit nothing
+      double squared;       // sum of area x squared distance
+      if (own.area > 0.0 && own.normal.norm() > 0.0) {
+        const Eigen::Vector3d unit = own.normal.normalized();
+        const double offset = unit.dot(own.centre / own.area);
+        squared = unit.dot(leaf.second * unit) - 2.0 * offset * unit.dot(leaf.first) + offset * offset * leaf.area;
+      } else {
+        const Eigen::Matrix3d covariance = leaf.second - leaf.first * leaf.first.transpose() / leaf.area;
+        squared = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly).eigenvalues()[0];
+      }
+      deviation += std::sqrt(leaf.area * std::max(0.0, squared));
+    }
     int children = 0;
     for (int c = 0; c < tree->child_counts[node]; ++c)
       children += tree->triangle_counts[std::size_t(tree->first_child[node] + c)];
-    tree->metrics[node] =
-        float(deviation[node] / double(std::max(1, children - int(tree->triangle_counts[node]))));
+    tree->metrics[node] = float(deviation / double(std::max(1, children - int(tree->triangle_counts[node]))));
   }
 }
 
@@ -202,7 +213,7 @@ void project_centres(const SignedDistanceField& field, McOctree* tree) {
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       if (std::isnan(d[i])) continue;
       const std::int32_t v = tree->centre_vertices[nodes[i]];
-      const float limit = 0.5f * float(tree->grid.cube_size) * float(1 << (tree->depth - tree->levels[nodes[i]]));
+      const float limit = float(0.5 * node_size(*tree, std::size_t(nodes[i])));
       Vec3f shift = moved[i] - d[i] * tree->normals[v];
       if (shift.norm() > limit) shift *= limit / shift.norm();
       tree->positions[v] += shift - moved[i];
@@ -239,41 +250,22 @@ std::vector<std::uint8_t> dropped_corners(const CubeNodes& leaves, const Triangl
 // directions the planes do not pin down, eigenvalues under a tenth of the
 // largest, left where they were): on a bend the fan's apex then sits off the
 // surface, as far as its flat triangles need, instead of on it. At most half
-// the node's size from the projected centre. 8-10 % less error at every level
+// the node's size from the projected centre. 3-8 % less error at every level
 // of the bunny at R = 256.
-void fit_centres(McOctree* tree) {
-  const std::size_t n = tree->size(), internal = tree->internal_nodes();
-  std::vector<Eigen::Matrix3d> a(n, Eigen::Matrix3d::Zero());
-  std::vector<Eigen::Vector3d> b(n, Eigen::Vector3d::Zero());
+void fit_centres(const std::vector<LeafSums>& sums, McOctree* tree) {
   const Eigen::Vector3d origin = tree->grid.origin;
-  for (std::size_t node = internal; node < n; ++node)  // the leaves
-    for (std::int32_t t = 0; t < tree->triangle_counts[node]; ++t) {
-      const Triangle& tri = tree->triangles[std::size_t(tree->first_triangle[node] + t)];
-      const Eigen::Vector3d p0 = tree->positions[tri[0]].cast<double>() - origin;
-      const Eigen::Vector3d area_normal =
-          0.5 * (tree->positions[tri[1]].cast<double>() - origin - p0).cross(tree->positions[tri[2]].cast<double>() - origin - p0);
-      const double area = area_normal.norm();
-      if (area <= 0.0) continue;
-      const Eigen::Vector3d unit = area_normal / area;
-      a[node] += area * unit * unit.transpose();
-      b[node] += area * unit * unit.dot(p0);
-    }
-  for (std::size_t node = n; node-- > 1;) {
-    a[std::size_t(tree->parents[node])] += a[node];
-    b[std::size_t(tree->parents[node])] += b[node];
-  }
-  for (std::size_t node = 0; node < internal; ++node) {
+  for (std::size_t node = 0; node < tree->internal_nodes(); ++node) {
     const std::int32_t v = tree->centre_vertices[node];
     if (v < 0) continue;
     const Eigen::Vector3d x0 = tree->positions[v].cast<double>() - origin;
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(a[node]);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(sums[node].planes);
     const Eigen::Vector3d values = solver.eigenvalues();
-    const Eigen::Vector3d residual = b[node] - a[node] * x0;
+    const Eigen::Vector3d residual = sums[node].offsets - sums[node].planes * x0;
     Eigen::Vector3d step = Eigen::Vector3d::Zero();
     for (int k = 0; k < 3; ++k)
       if (values[k] > 0.1 * values[2] && values[k] > 0.0)
         step += solver.eigenvectors().col(k) * (solver.eigenvectors().col(k).dot(residual) / values[k]);
-    const double limit = 0.5 * tree->grid.cube_size * double(1 << (tree->depth - tree->levels[node]));
+    const double limit = 0.5 * node_size(*tree, node);
     if (step.norm() > limit) step *= limit / step.norm();
     tree->positions[v] = (x0 + step + origin).cast<float>();
   }
@@ -573,7 +565,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     for (std::size_t i = 0; i < slots.size(); ++i) tree.sub_edge_vertices[slots[i].first][slots[i].second] = vertices[i];
   }
 
-  compute_metrics(options.metric, &tree);
+  const std::vector<LeafSums> sums = leaf_sums(tree);
+  compute_metrics(options.metric, sums, &tree);
 
   // Added vertices take normals from the triangles around them, colours from
   // their neighbours.
@@ -634,7 +627,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     }
   }
   project_centres(field, &tree);
-  fit_centres(&tree);
+  fit_centres(sums, &tree);
   return tree;
 }
 
