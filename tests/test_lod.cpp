@@ -10,12 +10,15 @@
 #include "reconstruct/marching_cubes.h"
 
 #include "test_shapes.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 #include <open3d/geometry/TriangleMesh.h>
 
 #include <algorithm>
 #include <map>
+#include <utility>
+#include <vector>
 
 using namespace scan2lod;
 using scan2lod::testing::from_open3d;
@@ -43,7 +46,7 @@ Model build_model(OrientedPoints points, int resolution) {
 
 const Model& bunny64() {
   static const Model m =
-      build_model(load_oriented_points({std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf"}), 64);
+      build_model(load_oriented_points({scan2lod::testing::bunny_scans()}), 64);
   return m;
 }
 
@@ -182,12 +185,20 @@ TEST(LodArray, AccumulationTableCountsTheExtractedTriangles) {
 
 namespace {
 
-void expect_closed_at_every_level(const Model& m, long euler) {
+// The topology of the levels issue 3's acceptance names: 1, 5, 10, 20, ..., 100 %.
+std::vector<std::pair<double, MeshTopology>> topology_at_levels(const Model& m) {
+  std::vector<std::pair<double, MeshTopology>> levels;
   std::vector<std::uint8_t> scratch;
   std::vector<Triangle> tris;
   for (double percent : {1.0, 5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0}) {
     extract_lod(m.tree, m.lod, priority_for_percent(m.lod, percent), &scratch, &tris);
-    const MeshTopology t = mesh_topology(compact_lod(m.tree, tris));
+    levels.push_back({percent, mesh_topology(compact_lod(m.tree, tris))});
+  }
+  return levels;
+}
+
+void expect_closed_at_every_level(const Model& m, long euler) {
+  for (const auto& [percent, t] : topology_at_levels(m)) {
     EXPECT_EQ(t.boundary_edges, 0u) << percent << "%";
     EXPECT_EQ(t.non_manifold_edges, 0u) << percent << "%";
     EXPECT_EQ(t.components, 1u) << percent << "%";
@@ -208,12 +219,7 @@ TEST(CrackPatching, ScannedTorusIsClosedAtEveryLevel) {
 }
 
 TEST(CrackPatching, BunnyHasNoNonManifoldEdgeAtAnyLevel) {
-  const Model& m = bunny64();
-  std::vector<std::uint8_t> scratch;
-  std::vector<Triangle> tris;
-  for (double percent : {1.0, 5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0}) {
-    extract_lod(m.tree, m.lod, priority_for_percent(m.lod, percent), &scratch, &tris);
-    const MeshTopology t = mesh_topology(compact_lod(m.tree, tris));
+  for (const auto& [percent, t] : topology_at_levels(bunny64())) {
     EXPECT_EQ(t.non_manifold_edges, 0u) << percent << "%";
     EXPECT_EQ(t.degenerate_triangles, 0u) << percent << "%";
   }
@@ -248,13 +254,10 @@ namespace {
 
 // Acceptance 3 of issue 3: no level opens a boundary the full mesh lacks.
 void expect_no_new_boundary_loops(const Model& m) {
-  std::vector<std::uint8_t> scratch;
-  std::vector<Triangle> tris;
-  extract_lod(m.tree, m.lod, m.lod.full(), &scratch, &tris);
-  const std::size_t full_loops = mesh_topology(compact_lod(m.tree, tris)).boundary_loops;
-  for (double percent : {1.0, 5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0}) {
-    extract_lod(m.tree, m.lod, priority_for_percent(m.lod, percent), &scratch, &tris);
-    const MeshTopology t = mesh_topology(compact_lod(m.tree, tris));
+  const auto levels = topology_at_levels(m);
+  ASSERT_EQ(levels.back().first, 100.0);
+  const std::size_t full_loops = levels.back().second.boundary_loops;
+  for (const auto& [percent, t] : levels) {
     EXPECT_LE(t.boundary_loops, full_loops) << percent << "%";
     EXPECT_EQ(t.non_manifold_edges, 0u) << percent << "%";
   }
@@ -265,5 +268,5 @@ void expect_no_new_boundary_loops(const Model& m) {
 TEST(CrackPatching, BunnyLevelsOpenNoBoundaryTheFullMeshLacks) {
   expect_no_new_boundary_loops(bunny64());
   expect_no_new_boundary_loops(
-      build_model(load_oriented_points({std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf"}), 128));
+      build_model(load_oriented_points({scan2lod::testing::bunny_scans()}), 128));
 }
