@@ -15,8 +15,7 @@ namespace fs = std::filesystem;
 namespace {
 
 using scan2lod::testing::CliRun;
-
-CliRun run(const std::string& args) { return scan2lod::testing::run_cli(args); }
+using scan2lod::testing::run_cli;
 
 fs::path scratch() {
   const fs::path dir = scan2lod::testing::scratch_folder() / "cli";
@@ -34,7 +33,7 @@ const std::string kScans = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.c
 
 TEST(Cli, ReconstructsTheBundledBunnyWithASummary) {
   const fs::path out = scratch() / "bunny.ply";
-  CliRun r = run("reconstruct " + kScans + " -o " + out.string() + " --resolution 64");
+  CliRun r = run_cli("reconstruct " + kScans + " -o " + out.string() + " --resolution 64");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("358808 points"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("triangles"), std::string::npos);
@@ -68,7 +67,7 @@ TEST(Cli, BadInputsFailCleanlyAndWriteNothing) {
       {kScans + " --distance magic", "distance method"},
   };
   for (const Case& c : cases) {
-    CliRun r = run("reconstruct " + c.args + " -o " + out.string() + " -q");
+    CliRun r = run_cli("reconstruct " + c.args + " -o " + out.string() + " -q");
     EXPECT_NE(r.status, 0) << c.args;
     EXPECT_NE(r.output.find("error"), std::string::npos) << c.args << ": " << r.output;
     EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << ": " << r.output;
@@ -77,7 +76,7 @@ TEST(Cli, BadInputsFailCleanlyAndWriteNothing) {
     EXPECT_TRUE(folder_has_only(dir, 4)) << "a temporary file was left behind by " << c.args;
   }
   // An output format nobody can write is refused before any work is lost.
-  CliRun r = run("reconstruct " + kScans + " -o " + (dir / "out.xyz").string() + " -r 16 -q");
+  CliRun r = run_cli("reconstruct " + kScans + " -o " + (dir / "out.xyz").string() + " -r 16 -q");
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find(".xyz"), std::string::npos) << r.output;
   EXPECT_TRUE(folder_has_only(dir, 4));
@@ -85,7 +84,7 @@ TEST(Cli, BadInputsFailCleanlyAndWriteNothing) {
 
 TEST(Cli, ConvertWritesABinaryScanSet) {
   const fs::path dir = scratch() / "converted";
-  CliRun r = run("convert " + kScans + " -o " + dir.string() + " --conf bun.conf");
+  CliRun r = run_cli("convert " + kScans + " -o " + dir.string() + " --conf bun.conf");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("10 scans"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir / "bun.conf"));

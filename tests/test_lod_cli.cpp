@@ -19,10 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 using scan2lod::testing::CliRun;
-
-CliRun run(const std::string& args, bool merge_stderr = true) {
-  return scan2lod::testing::run_cli(args, merge_stderr);
-}
+using scan2lod::testing::run_cli;
 
 fs::path scratch() { return scan2lod::testing::scratch_folder("lod_cli"); }
 
@@ -32,7 +29,7 @@ const std::string kScans = scan2lod::testing::bunny_scans();
 const fs::path& bunny_model() {
   static const fs::path path = [] {
     const fs::path p = scratch() / "bunny64.mco";
-    const CliRun r = run("build " + kScans + " -o " + p.string() + " -r 64 -q");
+    const CliRun r = run_cli("build " + kScans + " -o " + p.string() + " -r 64 -q");
     EXPECT_EQ(r.status, 0) << r.output;
     return p;
   }();
@@ -47,7 +44,7 @@ std::size_t files_in(const fs::path& dir) {
 
 TEST(LodCli, BuildPrintsAOneLineSummary) {
   const fs::path model = scratch() / "summary.mco";
-  const CliRun r = run("build " + kScans + " -o " + model.string() + " -r 32 --quiet");
+  const CliRun r = run_cli("build " + kScans + " -o " + model.string() + " -r 32 --quiet");
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* word : {"358808 points", "leaves", "nodes", "expansions", "triangles at 100%", "reconstruct",
                            "octree"})
@@ -59,7 +56,7 @@ TEST(LodCli, BuildPrintsAOneLineSummary) {
 TEST(LodCli, InfoAndExtractAgreeOnTheBunny) {
   const fs::path& model = bunny_model();
   ASSERT_TRUE(fs::exists(model));
-  const CliRun info = run("info " + model.string() + " --json", false);
+  const CliRun info = run_cli("info " + model.string() + " --json", false);
   ASSERT_EQ(info.status, 0) << info.output;
   const nlohmann::json j = nlohmann::json::parse(info.output);
   EXPECT_EQ(j.at("resolution").get<int>(), 64);
@@ -97,7 +94,7 @@ TEST(LodCli, InfoAndExtractAgreeOnTheBunny) {
 
   // --percent 100 writes the full mesh that info counted.
   const fs::path out = scratch() / "full.ply";
-  const CliRun x = run("extract " + model.string() + " --percent 100 -o " + out.string() + " --json", false);
+  const CliRun x = run_cli("extract " + model.string() + " --percent 100 -o " + out.string() + " --json", false);
   ASSERT_EQ(x.status, 0) << x.output;
   const nlohmann::json e = nlohmann::json::parse(x.output);
   for (const char* key : {"priority", "triangles", "vertices", "extract_seconds"})
@@ -113,24 +110,24 @@ TEST(LodCli, InfoAndExtractAgreeOnTheBunny) {
 
   // --triangles takes the finest level within the budget; --priority is exact.
   const std::size_t budget = fifth;
-  const CliRun t = run("extract " + model.string() + " --triangles " + std::to_string(budget) + " -o " +
+  const CliRun t = run_cli("extract " + model.string() + " --triangles " + std::to_string(budget) + " -o " +
                            (scratch() / "budget.obj").string() + " --json",
                        false);
   ASSERT_EQ(t.status, 0) << t.output;
   const nlohmann::json tj = nlohmann::json::parse(t.output);
   EXPECT_LE(tj.at("triangles").get<std::size_t>(), budget);
   EXPECT_GE(tj.at("priority").get<std::size_t>(), lods[4].at("priority").get<std::size_t>());
-  const CliRun p = run("extract " + model.string() + " --priority 0 -o " + (scratch() / "root.off").string() + " --json",
+  const CliRun p = run_cli("extract " + model.string() + " --priority 0 -o " + (scratch() / "root.off").string() + " --json",
                        false);
   ASSERT_EQ(p.status, 0) << p.output;
   EXPECT_EQ(nlohmann::json::parse(p.output).at("priority").get<std::size_t>(), 0u);
   EXPECT_LT(nlohmann::json::parse(p.output).at("triangles").get<std::size_t>(), 20u);
 
   // Without --json: a one-line summary and a table.
-  const CliRun plain = run("extract " + model.string() + " --percent 20 -o " + (scratch() / "p20.ply").string());
+  const CliRun plain = run_cli("extract " + model.string() + " --percent 20 -o " + (scratch() / "p20.ply").string());
   ASSERT_EQ(plain.status, 0) << plain.output;
   EXPECT_NE(plain.output.find(std::to_string(fifth) + " triangles"), std::string::npos) << plain.output;
-  const CliRun table = run("info " + model.string());
+  const CliRun table = run_cli("info " + model.string());
   ASSERT_EQ(table.status, 0) << table.output;
   EXPECT_NE(table.output.find("LOD %"), std::string::npos) << table.output;
   EXPECT_NE(table.output.find(std::to_string(full)), std::string::npos) << table.output;
@@ -175,7 +172,7 @@ TEST(LodCli, BadInputsFailCleanlyAndWriteNothing) {
       {"build " + (dir / "absent.conf").string() + " -o " + (dir / "model.mco").string(), "absent.conf"},
   };
   for (const Case& c : cases) {
-    const CliRun r = run(c.args + " -q");
+    const CliRun r = run_cli(c.args + " -q");
     EXPECT_NE(r.status, 0) << c.args;
     EXPECT_NE(r.output.find("scan2lod: error: "), std::string::npos) << c.args << ": " << r.output;
     EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << ": " << r.output;

@@ -28,10 +28,7 @@ namespace fs = std::filesystem;
 namespace {
 
 using scan2lod::testing::CliRun;
-
-CliRun run(const std::string& args, bool merge_stderr = true) {
-  return scan2lod::testing::run_cli(args, merge_stderr);
-}
+using scan2lod::testing::run_cli;
 
 fs::path scratch() { return scan2lod::testing::scratch_folder("visualize"); }
 
@@ -43,7 +40,7 @@ const std::string kScans = scan2lod::testing::bunny_scans();
 const fs::path& bunny_model() {
   static const fs::path path = [] {
     const fs::path p = scratch() / "bunny64.mco";
-    const CliRun r = run("build " + kScans + " -o " + p.string() + " -r 64 -q");
+    const CliRun r = run_cli("build " + kScans + " -o " + p.string() + " -r 64 -q");
     EXPECT_EQ(r.status, 0) << r.output;
     return p;
   }();
@@ -142,7 +139,7 @@ TEST(VisualizeLevels, TheCutCoversTheSurfaceOnceAtEveryPriority) {
 TEST(VisualizeRender, MontagePanelsShowTheBunnyAndItsLevels) {
   if (!have_display()) GTEST_SKIP() << "no X display; scripts/build.sh test runs the tests under xvfb-run";
   const fs::path out = scratch() / "montage.png";
-  const CliRun r = run("render " + bunny_model().string() + " --percent 100,20,60,60 --size 200x200 --mode both -o " +
+  const CliRun r = run_cli("render " + bunny_model().string() + " --percent 100,20,60,60 --size 200x200 --mode both -o " +
                        out.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.output;
   const Picture pic = read_png(out);
@@ -181,7 +178,7 @@ TEST(VisualizeRender, TwoRunsGiveTheSamePicture) {
   const fs::path a = scratch() / "same_a.png", b = scratch() / "same_b.png";
   for (const fs::path& out : {a, b}) {
     const CliRun r =
-        run("render " + bunny_model().string() + " --percent 40 --size 160x120 --mode shaded -o " + out.string());
+        run_cli("render " + bunny_model().string() + " --percent 40 --size 160x120 --mode shaded -o " + out.string());
     ASSERT_EQ(r.status, 0) << r.output;
   }
   const Picture pa = read_png(a), pb = read_png(b);
@@ -194,7 +191,7 @@ TEST(VisualizeRender, TwoRunsGiveTheSamePicture) {
 TEST(VisualizeRender, SingleModePutsLevelsSideBySide) {
   if (!have_display()) GTEST_SKIP() << "no X display";
   const fs::path out = scratch() / "row.png";
-  const CliRun r = run("render " + bunny_model().string() +
+  const CliRun r = run_cli("render " + bunny_model().string() +
                        " --percent 100,20 --size 150x150 --mode wireframe -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.output;
   const Picture pic = read_png(out);
@@ -219,7 +216,7 @@ TEST(VisualizeRender, BadInputEndsInAClearErrorAndNoFile) {
       {"render " + model + " --mode flat -o " + out.string(), "shaded, wireframe or both"},
   };
   for (const Case& c : cases) {
-    const CliRun r = run(c.args);
+    const CliRun r = run_cli(c.args);
     EXPECT_NE(r.status, 0) << c.args;
     EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << " -> " << r.output;
@@ -255,7 +252,7 @@ Curve curve_in(const Picture& pic, const Region& r, const std::uint8_t* colour) 
 TEST(VisualizePlot, TheThreeLodGraphsHoldCurves) {
   if (!have_display()) GTEST_SKIP() << "no X display";
   const fs::path out = scratch() / "plots.png";
-  const CliRun r = run("plot " + bunny_model().string() + " --size 400x300 -o " + out.string());
+  const CliRun r = run_cli("plot " + bunny_model().string() + " --size 400x300 -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("3 charts"), std::string::npos) << r.output;
   const Picture pic = read_png(out);
@@ -289,9 +286,9 @@ TEST(VisualizePlot, ErrorAgainstTrianglesFallsToZeroAtFullDetail) {
   // The reference is the model's own full-detail mesh: its error is zero at
   // 100 % and positive below.
   const fs::path reference = scratch() / "full_reference.ply";
-  ASSERT_EQ(run("extract " + bunny_model().string() + " --percent 100 -o " + reference.string()).status, 0);
+  ASSERT_EQ(run_cli("extract " + bunny_model().string() + " --percent 100 -o " + reference.string()).status, 0);
   const fs::path out = scratch() / "plots_error.png";
-  const CliRun r = run("plot " + bunny_model().string() + " --reference " + reference.string() +
+  const CliRun r = run_cli("plot " + bunny_model().string() + " --reference " + reference.string() +
                            " --percent 2,10,40,100 --samples 4000 --size 300x250 -o " + out.string(),
                        false);
   ASSERT_EQ(r.status, 0) << r.output;
@@ -332,7 +329,7 @@ TEST(VisualizePlot, BadInputEndsInAClearErrorAndNoFile) {
       {"plot " + model + " --size 10 -o " + out.string(), "WIDTHxHEIGHT"},
   };
   for (const Case& c : cases) {
-    const CliRun r = run(c.args);
+    const CliRun r = run_cli(c.args);
     EXPECT_NE(r.status, 0) << c.args;
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << " -> " << r.output;
     EXPECT_FALSE(fs::exists(out)) << c.args;
