@@ -25,16 +25,7 @@ fs::path scratch() { return scan2lod::testing::scratch_folder("lod_cli"); }
 
 const std::string kScans = scan2lod::testing::bunny_scans();
 
-// The bunny at R = 64, built once by `scan2lod build`.
-const fs::path& bunny_model() {
-  static const fs::path path = [] {
-    const fs::path p = scratch() / "bunny64.mco";
-    const CliRun r = run_cli("build " + kScans + " -o " + p.string() + " -r 64 -q");
-    EXPECT_EQ(r.status, 0) << r.output;
-    return p;
-  }();
-  return path;
-}
+using scan2lod::testing::bunny_model;
 
 std::size_t files_in(const fs::path& dir) {
   return std::size_t(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));

@@ -2,6 +2,8 @@
 // scratch folder per test process that is removed when the process exits.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -61,5 +63,17 @@ inline bool have_display() {
 
 // The bundled bunny scans' .conf.
 inline std::string bunny_scans() { return std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf"; }
+
+// The bundled bunny's model at R = 64, built once per test process by
+// `scan2lod build`.
+inline const std::filesystem::path& bunny_model() {
+  static const std::filesystem::path path = [] {
+    const std::filesystem::path p = scratch_folder("models") / "bunny64.mco";
+    const CliRun r = run_cli("build " + bunny_scans() + " -o " + p.string() + " -r 64 -q");
+    EXPECT_EQ(r.status, 0) << r.output;
+    return p;
+  }();
+  return path;
+}
 
 }  // namespace scan2lod::testing

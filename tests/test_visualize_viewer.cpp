@@ -41,15 +41,7 @@ using scan2lod::testing::have_display;
 
 const std::string kScans = scan2lod::testing::bunny_scans();
 
-const fs::path& bunny_model() {
-  static const fs::path path = [] {
-    const fs::path p = scratch() / "bunny64.mco";
-    const CliRun r = scan2lod::testing::run_cli("build " + kScans + " -o " + p.string() + " -r 64 -q");
-    EXPECT_EQ(r.status, 0) << r.output;
-    return p;
-  }();
-  return path;
-}
+using scan2lod::testing::bunny_model;
 
 // A user's slider drag, as the widget reports it.
 void drag_slider(scan2lod::Viewer& viewer, double value) {
