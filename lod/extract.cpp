@@ -47,8 +47,12 @@ bool transition_of(const McOctree& tree, std::int32_t node, const std::vector<st
   // A node beside expanded cells is triangulated against the finer nodes there.
   const auto& around = tree.neighbours[node];
   std::uint32_t fine = 0;
-  for (int c = 0; c < 27; ++c)
-    if (around[c] >= 0 && (expanded[around[c]] & kExpanded)) fine |= 1u << c;
+  // Branch-free: whether a cell is empty or expanded is as good as random.
+  const std::uint8_t* flags = expanded.data();
+  for (int c = 0; c < 27; ++c) {
+    const std::int32_t a = around[c];
+    fine |= std::uint32_t(flags[std::max(a, 0)] & kExpanded & std::uint8_t(a >= 0)) << c;
+  }
   fine &= ~(1u << 13);  // the node itself
   if (!fine) return false;
   std::uint16_t edges = 0;

@@ -1,5 +1,6 @@
 #include "lod/transition.h"
 
+#include "core/flat_hash.h"
 #include "reconstruct/cube_table.h"
 
 #include <algorithm>
@@ -84,7 +85,6 @@ namespace {
 constexpr int kCentreSlot = 60;
 constexpr int kMaxTransitionTriangles = 64;
 struct SlotTriangles {
-  std::uint64_t key = ~std::uint64_t(0);
   std::uint8_t count = 0;
   std::uint8_t slots[kMaxTransitionTriangles][3];
 };
@@ -159,34 +159,76 @@ void transition_slots(const TransitionInput& in, SlotTriangles* result) {
   }
 }
 
+// The lattice points whose signs the triangulation reads: the corners, the
+// midpoints of split edges and the points of fine faces.
+std::uint32_t used_points(const TransitionInput& in) {
+  static const auto masks = [] {
+    struct Masks {
+      std::uint32_t corners = 0;
+      std::array<std::uint32_t, 12> edge_mid{};
+      std::array<std::uint32_t, 6> face{};
+    } m;
+    const Tables& T = tables();
+    for (int c = 0; c < 8; ++c) m.corners |= 1u << lattice_of_corner(c);
+    for (int e = 0; e < 12; ++e)
+      m.edge_mid[e] = 1u << ((lattice_of_corner(edge_corner(e, 0)) + lattice_of_corner(edge_corner(e, 1))) / 2);
+    for (int f = 0; f < 6; ++f)
+      for (int p : T.face_points[f]) m.face[f] |= 1u << p;
+    return m;
+  }();
+  std::uint32_t used = masks.corners;
+  for (int e = 0; e < 12; ++e)
+    if ((in.split_edges >> e) & 1) used |= masks.edge_mid[e];
+  for (int f = 0; f < 6; ++f)
+    if ((in.fine_faces >> f) & 1) used |= masks.face[f];
+  return used;
+}
+
 // Configurations repeat (a flat stretch of surface gives the same signs node
-// after node), so each thread keeps the last one per hash slot.
-const SlotTriangles& cached_slots(const TransitionInput& in) {
-  constexpr std::size_t kCacheSlots = 1 << 13;
-  thread_local std::vector<SlotTriangles> cache(kCacheSlots);
-  const std::uint64_t key = std::uint64_t(in.inside & ((1u << 27) - 1)) | std::uint64_t(in.fine_faces & 63) << 27 |
+// after node), so each thread keeps every one it has built, packed: a count
+// and the slot triples, 1 + 3 x count bytes, which the emit loop reads in one
+// or two cache lines (a fixed 200-byte entry per hash slot was slower at every
+// level than this, though it missed no more often).
+const std::uint8_t* cached_slots(const TransitionInput& in) {
+  struct Memo {
+    FlatHashMap offsets{1 << 14};
+    std::vector<std::uint8_t> packed;
+  };
+  thread_local Memo memo;
+  constexpr std::size_t kMaxPacked = std::size_t(16) << 20;  // start over beyond this
+  const std::uint64_t key = std::uint64_t(in.inside & used_points(in)) | std::uint64_t(in.fine_faces & 63) << 27 |
                             std::uint64_t(in.split_edges & 4095) << 33;
-  SlotTriangles& entry = cache[(key * 0x9E3779B97F4A7C15ull) >> (64 - 13)];
-  if (entry.key != key) {
-    transition_slots(in, &entry);
-    entry.key = key;
+  std::int32_t at = memo.offsets.find(key);
+  if (at < 0) {
+    if (memo.packed.size() > kMaxPacked) memo = Memo{};
+    SlotTriangles built;
+    transition_slots(in, &built);
+    at = std::int32_t(memo.packed.size());
+    memo.packed.push_back(built.count);
+    memo.packed.insert(memo.packed.end(), &built.slots[0][0], &built.slots[0][0] + 3 * built.count);
+    memo.offsets.insert(key, at);
   }
-  return entry;
+  return memo.packed.data() + at;
 }
 
 }  // namespace
 
-int transition_triangle_count(const TransitionInput& in) { return cached_slots(in).count; }
+int transition_triangle_count(const TransitionInput& in) { return cached_slots(in)[0]; }
 
 void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out) {
-  const SlotTriangles& entry = cached_slots(in);
-  auto vertex = [&](int s) {
-    return s < kSubEdges ? in.sub_edge_vertices[s] : s < kCentreSlot ? in.edge_vertices[s - kSubEdges] : in.centre;
-  };
-  for (int i = 0; i < entry.count; ++i) {
-    const std::uint8_t* t = entry.slots[i];
-    out->push_back({vertex(t[0]), vertex(t[1]), vertex(t[2])});
-  }
+  const std::uint8_t* entry = cached_slots(in);
+  const int count = entry[0];
+  const std::uint8_t* slots = entry + 1;
+  // Slot -> vertex as one table: choosing among three arrays per corner
+  // mispredicted often enough to cost more than the copy.
+  std::int32_t vertex[kCentreSlot + 1];
+  std::copy_n(in.sub_edge_vertices, kSubEdges, vertex);
+  std::copy_n(in.edge_vertices, 12, vertex + kSubEdges);
+  vertex[kCentreSlot] = in.centre;
+  const std::size_t first = out->size();
+  out->resize(first + std::size_t(count));
+  Triangle* emitted = out->data() + first;
+  for (int i = 0; i < count; ++i, slots += 3) emitted[i] = {vertex[slots[0]], vertex[slots[1]], vertex[slots[2]]};
 }
 
 }  // namespace scan2lod
