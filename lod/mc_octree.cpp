@@ -4,11 +4,14 @@
 #include "core/flat_hash.h"
 #include "reconstruct/cube_table.h"
 #include "reconstruct/mesh_field.h"
+#include "reconstruct/signed_distance.h"
 
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <memory>
 #include <numeric>
 
 namespace scan2lod {
@@ -33,9 +36,14 @@ std::uint64_t corner_lattice_key(std::uint64_t key, int shift, int c) {
 }
 
 // Signed distances on the leaf lattice: the leaves' own where they have them,
-// the field elsewhere, each point evaluated once.
+// else a sign inferred from the tree (see `Inference`), else the field, each
+// point evaluated once.
 class LatticeDistances {
  public:
+  // Infers a point's value from the tree, given a node that contains it;
+  // false when it cannot.
+  using Inference = std::function<bool(std::uint64_t key, std::int32_t node, float* value)>;
+
   // `dropped[i]`: corner i's sign only shaped pieces that clean-up removed; the
   // field decides it instead.
   LatticeDistances(const CubeNodes& leaves, const SignedDistanceField& field, const std::vector<std::uint8_t>& dropped)
@@ -44,14 +52,56 @@ class LatticeDistances {
       if (dropped[i]) continue;
       index_.insert(leaves.corner_keys[i], std::int32_t(values_.size()));
       values_.push_back(leaves.corner_distances[i]);
+      inferred_.push_back(0);
     }
   }
 
-  // Makes sure every key has a value (one batched field call for the new ones).
-  void ensure(const std::vector<std::uint64_t>& keys) {
+  void set_inference(Inference infer) { infer_ = std::move(infer); }
+
+  // Makes sure every key has a value: inferred where `nodes` (a node holding
+  // each key) allow it, the rest in one batched field call.
+  void ensure(const std::vector<std::uint64_t>& keys, const std::vector<std::int32_t>* nodes = nullptr) {
     std::vector<std::uint64_t> fresh;
-    for (std::uint64_t k : keys)
-      if (index_.find(k) == -1) index_.insert(k, -2), fresh.push_back(k);  // -2: pending
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      const std::uint64_t k = keys[i];
+      if (index_.find(k) != -1) continue;
+      float v;
+      if (nodes && infer_ && infer_(k, (*nodes)[i], &v)) {
+        index_.insert(k, std::int32_t(values_.size()));
+        values_.push_back(v);
+        inferred_.push_back(1);
+        continue;
+      }
+      index_.insert(k, -2), fresh.push_back(k);  // -2: pending
+    }
+    query(fresh);
+  }
+
+  // The field's value where a sign was inferred: interpolating a crossing
+  // needs the distance itself.
+  float exact(std::uint64_t key) {
+    ensure({key});
+    const std::int32_t at = index_.find(key);
+    if (inferred_[std::size_t(at)]) {
+      index_.assign(key, -2);
+      query({key});
+    }
+    return this->at(key);
+  }
+
+  // The value at key if it is there already.
+  bool known(std::uint64_t key, float* value) const {
+    const std::int32_t at = index_.find(key);
+    if (at < 0) return false;
+    *value = values_[std::size_t(at)];
+    return true;
+  }
+
+  float at(std::uint64_t key) const { return values_[index_.find(key)]; }
+  bool inside(std::uint64_t key) const { return at(key) < 0.f; }
+
+ private:
+  void query(const std::vector<std::uint64_t>& fresh) {
     if (fresh.empty()) return;
     std::vector<Vec3f> positions(fresh.size());
     for (std::size_t i = 0; i < fresh.size(); ++i) {
@@ -64,17 +114,16 @@ class LatticeDistances {
     for (std::size_t i = 0; i < fresh.size(); ++i) {
       index_.assign(fresh[i], std::int32_t(values_.size()));
       values_.push_back(std::isnan(d[i]) ? 1.f : d[i]);
+      inferred_.push_back(0);
     }
   }
 
-  float at(std::uint64_t key) const { return values_[index_.find(key)]; }
-  bool inside(std::uint64_t key) const { return at(key) < 0.f; }
-
- private:
   const CubeGrid& grid_;
   const SignedDistanceField& field_;
   FlatHashMap index_;
   std::vector<float> values_;
+  std::vector<std::uint8_t> inferred_;
+  Inference infer_;
 };
 
 // The edge length of a node's cube.
@@ -335,6 +384,53 @@ void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
 
 }  // namespace
 
+// Where the mesh field's sign may turn without a surface: along the mesh's rim
+// (its boundary edges) and over hole patches; as points, searched with FLANN.
+class SignHazards {
+ public:
+  SignHazards(const TriangleMesh& mesh, const std::vector<Triangle>& patches) {
+    std::vector<std::uint64_t> edges;
+    edges.reserve(mesh.triangles.size() * 3);
+    for (const Triangle& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) edges.push_back(edge_key(t[k], t[(k + 1) % 3]));
+    std::sort(edges.begin(), edges.end());
+    for (std::size_t i = 0; i < edges.size();) {
+      std::size_t j = i + 1;
+      while (j < edges.size() && edges[j] == edges[i]) ++j;
+      if (j - i == 1) add_segment(mesh.positions[edges[i] >> 32], mesh.positions[edges[i] & 0xffffffffu]);
+      i = j;
+    }
+    for (const Triangle& t : patches)
+      for (int k = 0; k < 3; ++k) {
+        add_segment(mesh.positions[t[k]], mesh.positions[t[(k + 1) % 3]]);
+        add_segment(mesh.positions[t[k]], (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3.f);
+      }
+    if (!points_.positions.empty()) index_ = std::make_unique<PointIndex>(points_);
+  }
+
+  // Whether every hazard is farther than `distance` from p.
+  bool farther_than(const Vec3f& p, double distance) const {
+    if (!index_) return true;
+    std::int32_t nearest;
+    float squared;
+    index_->knn(&p, 1, 1, &nearest, &squared, 1);
+    return std::sqrt(double(squared)) > distance + gap_;
+  }
+
+ private:
+  // Its ends and midpoint: any point of it is within a quarter of its length of one.
+  void add_segment(const Vec3f& a, const Vec3f& b) {
+    points_.positions.push_back(a);
+    points_.positions.push_back(b);
+    points_.positions.push_back((a + b) * 0.5f);
+    gap_ = std::max(gap_, 0.25 * double((b - a).norm()));
+  }
+
+  OrientedPoints points_;
+  double gap_ = 0.0;
+  std::unique_ptr<PointIndex> index_;
+};
+
 McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field,
                          const OctreeOptions& options) {
   if (leaves.size() == 0) throw InputError("", "no leaf cube nodes: the reconstruction is empty");
@@ -405,6 +501,52 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
       }
 
   LatticeDistances distances(leaves, field, dropped_corners(leaves, mesh));
+  // A point in a child cube the tree lacks has no leaf around it: no surface
+  // crosses that cube, so the point takes the sign of the cube's corner at the
+  // parent's centre, which the parent's children already hold (Fig. 5.2 gives
+  // parents their children's signs the same way). Near the mesh's rim or a
+  // hole patch the mesh field's sign can turn inside such a cube without a
+  // surface (beyond a rim, or across a patch no leaf holds): there the field
+  // is asked.
+  const SignHazards hazards(mesh, leaves.patch_triangles);
+  std::vector<std::int8_t> centre_usable(n, 0);  // 1 yes, -1 no, 0 not yet known
+  const double cell = tree.grid.cube_size;
+  distances.set_inference([&](std::uint64_t key, std::int32_t node, float* value) {
+    int px, py, pz;
+    unpack_key(key, &px, &py, &pz);
+    for (;;) {  // down to the deepest node holding the point
+      if (tree.first_child[node] < 0) return false;  // a leaf's corner the leaves dropped
+      const int child_shift = depth - tree.levels[node] - 1;
+      auto within = [&](int p, int lo) { return p >= (lo << child_shift) && p <= ((lo + 1) << child_shift); };
+      std::int32_t next = -1;
+      for (std::int32_t c = tree.first_child[node], end = c + tree.child_counts[node]; c < end && next < 0; ++c) {
+        int cx, cy, cz;
+        unpack_key(tree.keys[c], &cx, &cy, &cz);
+        if (within(px, cx) && within(py, cy) && within(pz, cz)) next = c;
+      }
+      if (next < 0) break;
+      node = next;
+    }
+    const int shift = depth - tree.levels[node];
+    int x, y, z;
+    unpack_key(tree.keys[node], &x, &y, &z);
+    const int half = 1 << (shift - 1);
+    const int cx = (x << shift) + half, cy = (y << shift) + half, cz = (z << shift) + half;
+    float v;
+    if (!distances.known(pack_key(cx, cy, cz), &v)) return false;
+    const double offset = cell * std::sqrt(double(px - cx) * (px - cx) + double(py - cy) * (py - cy) +
+                                           double(pz - cz) * (pz - cz));
+    std::int8_t& usable = centre_usable[std::size_t(node)];
+    if (usable == 0) {
+      // Every point of the child cube is within its diagonal of the centre.
+      const double diagonal = std::sqrt(3.0) * cell * half;
+      usable = hazards.farther_than(tree.grid.corner_position(cx, cy, cz), std::fabs(v) + 2.0 * diagonal + 2.0 * cell)
+                   ? 1 : -1;
+    }
+    if (usable < 0) return false;
+    *value = float(v < 0.f ? -(std::fabs(v) + offset) : std::fabs(v) + offset);
+    return true;
+  });
   const auto& table = cube_cases();
   const std::size_t first_new_vertex = tree.positions.size();
   // Coarse edges resolved so far, per level: (lower lattice corner << 2 | axis) -> vertex.
@@ -412,7 +554,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
 
   // The vertex on each given level-`level` edge whose ends' signs differ: the
   // half that changes sign, recursively, down to a leaf edge.
-  auto resolve_edges = [&](int level, const std::vector<std::uint64_t>& edges, std::vector<std::int32_t>* out) {
+  auto resolve_edges = [&](int level, const std::vector<std::uint64_t>& edges, const std::vector<std::int32_t>& owners,
+                           std::vector<std::int32_t>* out) {
     out->assign(edges.size(), -1);
     std::vector<std::uint64_t> current = edges;  // edge key at the level being walked
     std::vector<std::size_t> open(edges.size());
@@ -421,14 +564,17 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     for (int l = level; l < depth && !open.empty(); ++l) {
       const int half_shift = depth - l - 1;
       std::vector<std::uint64_t> mids;
+      std::vector<std::int32_t> mid_nodes;
       mids.reserve(open.size() * 2);
+      mid_nodes.reserve(open.size() * 2);
       for (std::size_t i : open) {
         const std::uint64_t lower = current[i] >> 2;
         const int axis = int(current[i] & 3);
         mids.push_back(lower);
         mids.push_back(lower + (kAxisStep[axis] << half_shift));
+        mid_nodes.insert(mid_nodes.end(), 2, owners[i]);
       }
-      distances.ensure(mids);
+      distances.ensure(mids, &mid_nodes);
       std::vector<std::size_t> still;
       for (std::size_t i : open) {
         const std::uint64_t lower = current[i] >> 2;
@@ -450,8 +596,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
         const std::uint64_t lower = current[i] >> 2;
         const int axis = int(current[i] & 3);
         const std::uint64_t upper = lower + kAxisStep[axis];
-        distances.ensure({lower, upper});
-        const float da = distances.at(lower), db = distances.at(upper);
+        const float da = distances.exact(lower), db = distances.exact(upper);
         const float t = std::clamp(std::fabs(da) / (std::fabs(da) + std::fabs(db)), 1e-4f, 1.f - 1e-4f);
         int x, y, z;
         unpack_key(lower, &x, &y, &z);
@@ -481,10 +626,15 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
       }
     } else {
       std::vector<std::uint64_t> corners;
+      std::vector<std::int32_t> corner_nodes;
       corners.reserve(std::size_t(end - begin) * 8);
+      corner_nodes.reserve(std::size_t(end - begin) * 8);
       for (std::int32_t node = begin; node < end; ++node)
-        for (int c = 0; c < 8; ++c) corners.push_back(corner_lattice_key(tree.keys[node], shift, c));
-      distances.ensure(corners);
+        for (int c = 0; c < 8; ++c) {
+          corners.push_back(corner_lattice_key(tree.keys[node], shift, c));
+          corner_nodes.push_back(node);
+        }
+      distances.ensure(corners, &corner_nodes);
       std::vector<std::uint64_t> edges;
       std::vector<std::pair<std::int32_t, int>> slots;
       for (std::int32_t node = begin; node < end; ++node) {
@@ -498,8 +648,9 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
           slots.push_back({node, e});
         }
       }
-      std::vector<std::int32_t> vertices;
-      resolve_edges(level, edges, &vertices);
+      std::vector<std::int32_t> vertices, owners(slots.size());
+      for (std::size_t i = 0; i < slots.size(); ++i) owners[i] = slots[i].first;
+      resolve_edges(level, edges, owners, &vertices);
       for (std::size_t i = 0; i < slots.size(); ++i) tree.edge_vertices[slots[i].first][slots[i].second] = vertices[i];
     }
     for (std::int32_t node = begin; node < end; ++node) {
@@ -533,10 +684,15 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     const int shift = depth - level;
     const std::int32_t begin = level_begin[level], end = level_begin[level + 1];
     std::vector<std::uint64_t> points;
+    std::vector<std::int32_t> point_nodes;
     points.reserve(std::size_t(end - begin) * 27);
+    point_nodes.reserve(std::size_t(end - begin) * 27);
     for (std::int32_t node = begin; node < end; ++node)
-      for (int p = 0; p < 27; ++p) points.push_back(lattice_key(tree.keys[node], shift, p));
-    distances.ensure(points);
+      for (int p = 0; p < 27; ++p) {
+        points.push_back(lattice_key(tree.keys[node], shift, p));
+        point_nodes.push_back(node);
+      }
+    distances.ensure(points, &point_nodes);
     std::vector<std::uint64_t> edges;
     std::vector<std::pair<std::int32_t, int>> slots;
     for (std::int32_t node = begin; node < end; ++node) {
@@ -560,8 +716,9 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
                                        ? -1 : node_index[level].find(pack_key(nx, ny, nz));
       }
     }
-    std::vector<std::int32_t> vertices;
-    resolve_edges(level + 1, edges, &vertices);
+    std::vector<std::int32_t> vertices, owners(slots.size());
+    for (std::size_t i = 0; i < slots.size(); ++i) owners[i] = slots[i].first;
+    resolve_edges(level + 1, edges, owners, &vertices);
     for (std::size_t i = 0; i < slots.size(); ++i) tree.sub_edge_vertices[slots[i].first][slots[i].second] = vertices[i];
   }
 

@@ -70,7 +70,9 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
     const float* points = result.at("points").GetDataPtr<float>();
     const auto* prim = result.at("primitive_ids").GetDataPtr<std::uint32_t>();
     const float* uv = result.at("primitive_uvs").GetDataPtr<float>();
-#pragma omp parallel for schedule(static)
+    // One thread: Open3D ran the query on TBB's workers, and an OpenMP team
+    // here kept both cores spinning against them, 5-8 ms per call whatever
+    // its size (the octree makes dozens of small calls).
     for (std::int64_t i = 0; i < std::int64_t(q.size()); ++i) {
       const Vec3f c(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
       const std::uint32_t t = prim[i];
