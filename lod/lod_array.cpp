@@ -2,8 +2,6 @@
 
 #include "lod/extract.h"
 
-#include "core/flat_hash.h"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -21,23 +19,30 @@ namespace {
 template <class Dependencies>
 std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies& dependencies) {
   const std::size_t n = tree.size();
-  FlatHashMap uses(tree.triangles.size() * 2);
-  auto count = [&](const Triangle& t) {
-    for (int k = 0; k < 3; ++k) {
-      const std::uint64_t e = edge_key(t[k], t[(k + 1) % 3]);
-      const std::int32_t before = uses.find(e);
-      if (before < 0) uses.insert(e, 1);
-      else uses.assign(e, before + 1);
-    }
-  };
   auto leaf_triangles = [&](std::size_t node) {
     const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
     return std::make_pair(first, first + tree.triangle_counts[node]);
   };
+  // The full mesh's boundary edges: those one triangle uses (sorted keys, not a
+  // hash map: a third of the time on the bunny).
+  std::vector<std::uint64_t> edges;
+  edges.reserve(3 * (tree.triangles.size() + tree.patch_triangles.size()));
+  auto add = [&](const Triangle& t) {
+    for (int k = 0; k < 3; ++k) edges.push_back(edge_key(t[k], t[(k + 1) % 3]));
+  };
   for (std::size_t node = 0; node < n; ++node)
     if (tree.is_leaf(node))
-      for (auto [t, end] = leaf_triangles(node); t != end; ++t) count(*t);
-  for (const Triangle& t : tree.patch_triangles) count(t);
+      for (auto [t, end] = leaf_triangles(node); t != end; ++t) add(*t);
+  for (const Triangle& t : tree.patch_triangles) add(t);
+  std::sort(edges.begin(), edges.end());
+  std::vector<std::uint64_t> rim;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i + 1;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1) rim.push_back(edges[i]);
+    i = j;
+  }
+  auto on_rim = [&](std::uint64_t e) { return std::binary_search(rim.begin(), rim.end(), e); };
 
   std::vector<std::uint8_t> pinned(n, 0);
   auto pin = [&](std::int32_t node) {
@@ -47,7 +52,7 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
     if (!tree.is_leaf(node) || tree.parents[node] < 0) continue;
     for (auto [t, end] = leaf_triangles(node); t != end; ++t)
       for (int k = 0; k < 3; ++k)
-        if (uses.find(edge_key((*t)[k], (*t)[(k + 1) % 3])) == 1) pin(tree.parents[node]);
+        if (on_rim(edge_key((*t)[k], (*t)[(k + 1) % 3]))) pin(tree.parents[node]);
   }
   for (std::int32_t node : tree.patch_needs) pin(node);
   // A crossing the leaves have no vertex for (mc_octree.cpp adds one) marks a
@@ -87,35 +92,32 @@ struct Key {
 
 LodArray number_nodes(const McOctree& tree) {
   const std::size_t n = tree.size();
-  std::vector<FlatHashMap> at_level(std::size_t(tree.depth) + 1);
-  for (std::size_t node = 0; node < n; ++node) at_level[tree.levels[node]].insert(tree.keys[node], std::int32_t(node));
   // A node may expand once everything beside it on its level is covered by
   // nodes of its level or finer: for each of the 26 cells around it, the
   // deepest node above that cell (its parent if the cell has a node, else the
   // ancestor whose subtree has no surface there) must have expanded. The seed's
   // "marked or none" reads the same, with null nodes as real children.
-  // The nodes above `node`'s 26 neighbour cells that must expand before it.
+  // The nodes above `node`'s 26 neighbour cells that must expand before it,
+  // found through the neighbour arrays of its ancestors: the cell's cube one
+  // level up is the parent's or one of the parent's neighbours, and so on.
   auto dependencies = [&](std::int32_t node, std::int32_t* deps) {
     const int level = tree.levels[node];
     int x, y, z;
     unpack_key(tree.keys[node], &x, &y, &z);
     const int side = 1 << level;
+    const auto& around = tree.neighbours[std::size_t(node)];
     int count = 0;
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          if (!(dx | dy | dz)) continue;
-          const int nx = x + dx, ny = y + dy, nz = z + dz;
-          if (nx < 0 || ny < 0 || nz < 0 || nx >= side || ny >= side || nz >= side) continue;
-          for (int l = level - 1; l >= 0; --l) {
-            const int s = level - l;
-            const std::int32_t a = at_level[l].find(pack_key(std::uint64_t(nx) >> s, std::uint64_t(ny) >> s,
-                                                              std::uint64_t(nz) >> s));
-            if (a < 0) continue;
-            if (std::find(deps, deps + count, a) == deps + count) deps[count++] = a;
-            break;
-          }
-        }
+    for (int c = 0; c < 27; ++c) {
+      if (c == 13) continue;
+      const int nx = x + c % 3 - 1, ny = y + c / 3 % 3 - 1, nz = z + c / 9 - 1;
+      if (nx < 0 || ny < 0 || nz < 0 || nx >= side || ny >= side || nz >= side) continue;
+      std::int32_t found = around[c] >= 0 ? tree.parents[around[c]] : -1;
+      for (std::int32_t up = tree.parents[node], s = 1; found < 0; up = tree.parents[up], ++s) {
+        const int cell = ((nx >> s) - (x >> s) + 1) + 3 * ((ny >> s) - (y >> s) + 1) + 9 * ((nz >> s) - (z >> s) + 1);
+        found = tree.neighbours[std::size_t(up)][cell];
+      }
+      if (std::find(deps, deps + count, found) == deps + count) deps[count++] = found;
+    }
     return count;
   };
   const std::vector<std::uint8_t> pinned = pinned_nodes(tree, dependencies);
@@ -134,7 +136,10 @@ LodArray number_nodes(const McOctree& tree) {
 
   std::vector<std::uint8_t> expanded(n, 0);
   std::vector<std::int32_t> blocking(n, 0);
-  std::vector<std::vector<std::int32_t>> waiting(n);
+  // Who waits for each node: singly linked lists in one flat array.
+  std::vector<std::int32_t> first_waiter(n, -1);
+  std::vector<std::pair<std::int32_t, std::int32_t>> waiters;  // (node, next)
+  waiters.reserve(tree.internal_nodes() * 8);
   std::priority_queue<Key> queue;
   auto enter_cut = [&](std::int32_t node) {
     if (tree.is_leaf(node)) return;
@@ -143,14 +148,16 @@ LodArray number_nodes(const McOctree& tree) {
     for (int i = 0, all = dependencies(node, deps); i < all; ++i)
       if (!expanded[deps[i]]) deps[count++] = deps[i];
     blocking[node] = count;
-    for (int i = 0; i < count; ++i) waiting[deps[i]].push_back(node);
+    for (int i = 0; i < count; ++i) {
+      waiters.push_back({node, first_waiter[deps[i]]});
+      first_waiter[deps[i]] = std::int32_t(waiters.size() - 1);
+    }
     if (count == 0) queue.push(priority(node));
   };
   auto expand = [&](std::int32_t node) {
     expanded[node] = 1;
-    for (std::int32_t w : waiting[node])
-      if (--blocking[w] == 0) queue.push(priority(w));
-    std::vector<std::int32_t>().swap(waiting[node]);
+    for (std::int32_t w = first_waiter[node]; w >= 0; w = waiters[std::size_t(w)].second)
+      if (--blocking[waiters[std::size_t(w)].first] == 0) queue.push(priority(waiters[std::size_t(w)].first));
   };
 
   // The accumulation table follows the extracted meshes exactly: expanding a
