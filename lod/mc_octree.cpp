@@ -35,72 +35,104 @@ std::uint64_t corner_lattice_key(std::uint64_t key, int shift, int c) {
                   (std::uint64_t(z) << shift) + ((c >> 2) & 1) * size);
 }
 
-// Signed distances on the leaf lattice: the leaves' own where they have them,
-// else a sign inferred from the tree (see `Inference`), else the field, each
-// point evaluated once.
-class LatticeDistances {
+// Signs on the leaf lattice: the leaves' own where they have them, else
+// inferred from the tree (see `Inference`), else the field's, each point
+// decided once. The octree asks for some ten million signs; they sit as bits
+// in 16^3 bricks under a dense directory, because a hash map's cache miss per
+// lookup was most of the transitions' time. Distances, which only leaf-edge
+// interpolation needs, stay in a hash map.
+class LatticeSigns {
  public:
-  // Infers a point's value from the tree, given a node that contains it;
+  // Infers a point's sign from the tree, given a node that holds the point;
   // false when it cannot.
-  using Inference = std::function<bool(std::uint64_t key, std::int32_t node, float* value)>;
+  using Inference = std::function<bool(std::uint64_t key, std::int32_t node, bool* inside)>;
 
   // `dropped[i]`: corner i's sign only shaped pieces that clean-up removed; the
   // field decides it instead.
-  LatticeDistances(const CubeNodes& leaves, const SignedDistanceField& field, const std::vector<std::uint8_t>& dropped)
-      : grid_(leaves.grid), field_(field), index_(leaves.corner_keys.size() * 2) {
-    for (std::size_t i = 0; i < leaves.corner_keys.size(); ++i) {
-      if (dropped[i]) continue;
-      index_.insert(leaves.corner_keys[i], std::int32_t(values_.size()));
-      values_.push_back(leaves.corner_distances[i]);
-      inferred_.push_back(0);
-    }
+  LatticeSigns(const CubeNodes& leaves, const SignedDistanceField& field, const std::vector<std::uint8_t>& dropped)
+      : grid_(leaves.grid), field_(field), side_((leaves.grid.resolution >> kBrickShift) + 1),
+        directory_(std::size_t(side_) * side_ * side_, -1), value_index_(leaves.corner_keys.size() * 2) {
+    for (std::size_t i = 0; i < leaves.corner_keys.size(); ++i)
+      if (!dropped[i]) store(leaves.corner_keys[i], leaves.corner_distances[i]);
   }
 
   void set_inference(Inference infer) { infer_ = std::move(infer); }
 
-  // Makes sure every key has a value: inferred where `nodes` (a node holding
+  // Makes sure every key has a sign: inferred where `nodes` (a node holding
   // each key) allow it, the rest in one batched field call.
   void ensure(const std::vector<std::uint64_t>& keys, const std::vector<std::int32_t>* nodes = nullptr) {
     std::vector<std::uint64_t> fresh;
     for (std::size_t i = 0; i < keys.size(); ++i) {
       const std::uint64_t k = keys[i];
-      if (index_.find(k) != -1) continue;
-      float v;
-      if (nodes && infer_ && infer_(k, (*nodes)[i], &v)) {
-        index_.insert(k, std::int32_t(values_.size()));
-        values_.push_back(v);
-        inferred_.push_back(1);
+      if (known(k)) continue;
+      bool in;
+      if (nodes && infer_ && infer_(k, (*nodes)[i], &in)) {
+        set(k, in);
         continue;
       }
-      index_.insert(k, -2), fresh.push_back(k);  // -2: pending
+      fresh.push_back(k);
     }
+    std::sort(fresh.begin(), fresh.end());
+    fresh.erase(std::unique(fresh.begin(), fresh.end()), fresh.end());
     query(fresh);
   }
 
-  // The field's value where a sign was inferred: interpolating a crossing
-  // needs the distance itself.
+  // The distance at key (the field's where the sign was inferred).
   float exact(std::uint64_t key) {
-    ensure({key});
-    const std::int32_t at = index_.find(key);
-    if (inferred_[std::size_t(at)]) {
-      index_.assign(key, -2);
+    float v;
+    if (!value(key, &v)) {
       query({key});
+      value(key, &v);
     }
-    return this->at(key);
+    return v;
   }
 
-  // The value at key if it is there already.
-  bool known(std::uint64_t key, float* value) const {
-    const std::int32_t at = index_.find(key);
+  // The distance at key when the leaves or the field gave one.
+  bool value(std::uint64_t key, float* v) const {
+    const std::int32_t at = value_index_.find(key);
     if (at < 0) return false;
-    *value = values_[std::size_t(at)];
+    *v = values_[std::size_t(at)];
     return true;
   }
 
-  float at(std::uint64_t key) const { return values_[index_.find(key)]; }
-  bool inside(std::uint64_t key) const { return at(key) < 0.f; }
+  bool known(std::uint64_t key) const { return bit(key, 0); }
+  bool inside(std::uint64_t key) const { return bit(key, kWordsPerBitset); }
 
  private:
+  static constexpr int kBrickShift = 4;  // 16^3 points a brick
+  static constexpr std::size_t kWordsPerBitset = std::size_t(1) << (3 * kBrickShift - 6);
+
+  // The brick's first word (known bits, then inside bits) and the bit in it.
+  std::pair<std::size_t, std::uint64_t> locate(std::uint64_t key, bool create) {
+    int x, y, z;
+    unpack_key(key, &x, &y, &z);
+    const std::size_t b = std::size_t(x >> kBrickShift) + std::size_t(side_) * (std::size_t(y >> kBrickShift) +
+                                                                             std::size_t(side_) * std::size_t(z >> kBrickShift));
+    if (directory_[b] < 0) {
+      if (!create) return {std::size_t(-1), 0};
+      directory_[b] = std::int32_t(bits_.size() / (2 * kWordsPerBitset));
+      bits_.resize(bits_.size() + 2 * kWordsPerBitset, 0);
+    }
+    constexpr int mask = (1 << kBrickShift) - 1;
+    const std::size_t local = std::size_t(x & mask) + (std::size_t(y & mask) << kBrickShift) +
+                              (std::size_t(z & mask) << (2 * kBrickShift));
+    return {std::size_t(directory_[b]) * 2 * kWordsPerBitset + (local >> 6), std::uint64_t(1) << (local & 63)};
+  }
+  bool bit(std::uint64_t key, std::size_t offset) const {
+    const auto [word, mask] = const_cast<LatticeSigns*>(this)->locate(key, false);
+    return word != std::size_t(-1) && (bits_[word + offset] & mask);
+  }
+  void set(std::uint64_t key, bool in) {
+    const auto [word, mask] = locate(key, true);
+    bits_[word] |= mask;
+    if (in) bits_[word + kWordsPerBitset] |= mask;
+  }
+  void store(std::uint64_t key, float d) {
+    value_index_.assign(key, std::int32_t(values_.size()));
+    values_.push_back(d);
+    set(key, d < 0.f);
+  }
+
   void query(const std::vector<std::uint64_t>& fresh) {
     if (fresh.empty()) return;
     std::vector<Vec3f> positions(fresh.size());
@@ -111,18 +143,16 @@ class LatticeDistances {
     }
     std::vector<float> d;
     field_(positions, &d);
-    for (std::size_t i = 0; i < fresh.size(); ++i) {
-      index_.assign(fresh[i], std::int32_t(values_.size()));
-      values_.push_back(std::isnan(d[i]) ? 1.f : d[i]);
-      inferred_.push_back(0);
-    }
+    for (std::size_t i = 0; i < fresh.size(); ++i) store(fresh[i], std::isnan(d[i]) ? 1.f : d[i]);
   }
 
   const CubeGrid& grid_;
   const SignedDistanceField& field_;
-  FlatHashMap index_;
+  int side_;                             // bricks along each axis
+  std::vector<std::int32_t> directory_;  // brick -> its index in bits_, or -1
+  std::vector<std::uint64_t> bits_;
+  FlatHashMap value_index_;
   std::vector<float> values_;
-  std::vector<std::uint8_t> inferred_;
   Inference infer_;
 };
 
@@ -500,7 +530,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
         edge_vertex.insert((lower << 2) | std::uint64_t(e / 4), leaves.edge_vertices[l][e]);
       }
 
-  LatticeDistances distances(leaves, field, dropped_corners(leaves, mesh));
+  LatticeSigns distances(leaves, field, dropped_corners(leaves, mesh));
   // A point in a child cube the tree lacks has no leaf around it: no surface
   // crosses that cube, so the point takes the sign of the cube's corner at the
   // parent's centre, which the parent's children already hold (Fig. 5.2 gives
@@ -511,7 +541,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   const SignHazards hazards(mesh, leaves.patch_triangles);
   std::vector<std::int8_t> centre_usable(n, 0);  // 1 yes, -1 no, 0 not yet known
   const double cell = tree.grid.cube_size;
-  distances.set_inference([&](std::uint64_t key, std::int32_t node, float* value) {
+  distances.set_inference([&](std::uint64_t key, std::int32_t node, bool* inside) {
     int px, py, pz;
     unpack_key(key, &px, &py, &pz);
     for (;;) {  // down to the deepest node holding the point
@@ -532,19 +562,21 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     unpack_key(tree.keys[node], &x, &y, &z);
     const int half = 1 << (shift - 1);
     const int cx = (x << shift) + half, cy = (y << shift) + half, cz = (z << shift) + half;
-    float v;
-    if (!distances.known(pack_key(cx, cy, cz), &v)) return false;
-    const double offset = cell * std::sqrt(double(px - cx) * (px - cx) + double(py - cy) * (py - cy) +
-                                           double(pz - cz) * (pz - cz));
+    const std::uint64_t centre = pack_key(cx, cy, cz);
+    if (!distances.known(centre)) return false;
     std::int8_t& usable = centre_usable[std::size_t(node)];
     if (usable == 0) {
-      // Every point of the child cube is within its diagonal of the centre.
+      // Every point of the child cube is within its diagonal of the centre,
+      // and the centre, a corner of a child with surface, is within that
+      // child's diagonal of the surface (unless the field said nearer).
       const double diagonal = std::sqrt(3.0) * cell * half;
-      usable = hazards.farther_than(tree.grid.corner_position(cx, cy, cz), std::fabs(v) + 2.0 * diagonal + 2.0 * cell)
+      float v;
+      const double to_surface = distances.value(centre, &v) ? std::fabs(v) : diagonal;
+      usable = hazards.farther_than(tree.grid.corner_position(cx, cy, cz), to_surface + 2.0 * diagonal + 2.0 * cell)
                    ? 1 : -1;
     }
     if (usable < 0) return false;
-    *value = float(v < 0.f ? -(std::fabs(v) + offset) : std::fabs(v) + offset);
+    *inside = distances.inside(centre);
     return true;
   });
   const auto& table = cube_cases();
