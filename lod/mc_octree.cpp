@@ -715,11 +715,26 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
       }
       int x, y, z;
       unpack_key(tree.keys[node], &x, &y, &z);
-      const int side = 1 << level;
+      // A neighbour is a child of the parent or of one of the parent's
+      // neighbours (found a level earlier): a scan of at most 8 children
+      // instead of a hash lookup.
+      const std::int32_t parent = tree.parents[node];
       for (int c = 0; c < 27; ++c) {
+        if (parent < 0) {
+          tree.neighbours[node][c] = c == 13 ? node : -1;
+          continue;
+        }
         const int nx = x + c % 3 - 1, ny = y + c / 3 % 3 - 1, nz = z + c / 9 - 1;
-        tree.neighbours[node][c] = nx < 0 || ny < 0 || nz < 0 || nx >= side || ny >= side || nz >= side
-                                       ? -1 : node_index[level].find(pack_key(nx, ny, nz));
+        // >> 1 rounds -1 down to -1: outside the parent's lattice too.
+        const int up = ((nx >> 1) - (x >> 1) + 1) + 3 * ((ny >> 1) - (y >> 1) + 1) + 9 * ((nz >> 1) - (z >> 1) + 1);
+        const std::int32_t above = tree.neighbours[std::size_t(parent)][up];
+        std::int32_t found = -1;
+        if (above >= 0) {
+          const std::uint64_t key = pack_key(std::uint64_t(nx), std::uint64_t(ny), std::uint64_t(nz));
+          for (std::int32_t k = tree.first_child[above], end = k + tree.child_counts[above]; k < end; ++k)
+            if (tree.keys[std::size_t(k)] == key) found = k;
+        }
+        tree.neighbours[node][c] = found;
       }
     }
     std::vector<std::int32_t> vertices, owners(slots.size());
