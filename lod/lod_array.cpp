@@ -1,5 +1,6 @@
 #include "lod/lod_array.h"
 
+#include "core/mesh_edges.h"
 #include "lod/extract.h"
 
 #include <algorithm>
@@ -23,26 +24,18 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
     const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
     return std::make_pair(first, first + tree.triangle_counts[node]);
   };
-  // The full mesh's boundary edges: those one triangle uses (sorted keys, not a
-  // hash map: a third of the time on the bunny).
-  std::vector<std::uint64_t> edges;
-  edges.reserve(3 * (tree.triangles.size() + tree.patch_triangles.size()));
-  auto add = [&](const Triangle& t) {
-    for (int k = 0; k < 3; ++k) edges.push_back(edge_key(t[k], t[(k + 1) % 3]));
-  };
+  // The full mesh: leaf triangles, then the patches.
+  std::vector<Triangle> full;
+  full.reserve(tree.triangles.size() + tree.patch_triangles.size());
+  std::vector<std::int32_t> first_of_leaf(n, -1);
   for (std::size_t node = 0; node < n; ++node)
-    if (tree.is_leaf(node))
-      for (auto [t, end] = leaf_triangles(node); t != end; ++t) add(*t);
-  for (const Triangle& t : tree.patch_triangles) add(t);
-  std::sort(edges.begin(), edges.end());
-  std::vector<std::uint64_t> rim;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i + 1;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1) rim.push_back(edges[i]);
-    i = j;
-  }
-  auto on_rim = [&](std::uint64_t e) { return std::binary_search(rim.begin(), rim.end(), e); };
+    if (tree.is_leaf(node)) {
+      first_of_leaf[node] = std::int32_t(full.size());
+      auto [t, end] = leaf_triangles(node);
+      full.insert(full.end(), t, end);
+    }
+  full.insert(full.end(), tree.patch_triangles.begin(), tree.patch_triangles.end());
+  const MeshEdges edges = mesh_edges(full, tree.positions.size());
 
   std::vector<std::uint8_t> pinned(n, 0);
   auto pin = [&](std::int32_t node) {
@@ -50,9 +43,9 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
   };
   for (std::size_t node = 0; node < n; ++node) {
     if (!tree.is_leaf(node) || tree.parents[node] < 0) continue;
-    for (auto [t, end] = leaf_triangles(node); t != end; ++t)
-      for (int k = 0; k < 3; ++k)
-        if (on_rim(edge_key((*t)[k], (*t)[(k + 1) % 3]))) pin(tree.parents[node]);
+    for (std::int32_t t = 0; t < tree.triangle_counts[node]; ++t)
+      for (std::int32_t e : edges.of_triangle[std::size_t(first_of_leaf[node] + t)])
+        if (edges.uses[std::size_t(e)] == 1) pin(tree.parents[node]);  // on the rim
   }
   for (std::int32_t node : tree.patch_needs) pin(node);
   // A crossing the leaves have no vertex for (mc_octree.cpp adds one) marks a

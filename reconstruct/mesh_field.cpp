@@ -1,7 +1,7 @@
 #include "reconstruct/mesh_field.h"
 
 #include "core/error.h"
-#include "core/flat_hash.h"
+#include "core/mesh_edges.h"
 
 #include <algorithm>
 #include <array>
@@ -36,8 +36,8 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
   const std::size_t nt = state->triangles.size();
   state->face_normals.resize(nt);
   state->vertex_normals.assign(mesh.positions.size(), Vec3f::Zero());
-  state->triangle_edges.resize(nt);
-  FlatHashMap edge_index(nt * 3);
+  MeshEdges edges = mesh_edges(state->triangles, mesh.positions.size());
+  state->edge_normals.assign(edges.size(), Vec3f::Zero());
   for (std::size_t t = 0; t < nt; ++t) {
     const Triangle& tri = state->triangles[t];
     const Vec3f n = (mesh.positions[tri[1]] - mesh.positions[tri[0]])
@@ -47,12 +47,10 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
       const Vec3f a = (mesh.positions[tri[(k + 1) % 3]] - mesh.positions[tri[k]]).normalized();
       const Vec3f b = (mesh.positions[tri[(k + 2) % 3]] - mesh.positions[tri[k]]).normalized();
       state->vertex_normals[tri[k]] += std::acos(std::clamp(a.dot(b), -1.f, 1.f)) * n;
-      const std::int32_t e = edge_index.insert(edge_key(tri[k], tri[(k + 1) % 3]), std::int32_t(state->edge_normals.size()));
-      if (std::size_t(e) == state->edge_normals.size()) state->edge_normals.push_back(Vec3f::Zero());
-      state->edge_normals[std::size_t(e)] += n;
-      state->triangle_edges[t][k] = e;
+      state->edge_normals[std::size_t(edges.of_triangle[t][k])] += n;
     }
   }
+  state->triangle_edges = std::move(edges.of_triangle);
   o3c::Tensor vertices = o3c::Tensor::Empty({std::int64_t(mesh.positions.size()), 3}, o3c::Float32);
   std::memcpy(vertices.GetDataPtr<float>(), mesh.positions.data(), mesh.positions.size() * sizeof(Vec3f));
   o3c::Tensor indices = o3c::Tensor::Empty({std::int64_t(state->triangles.size()), 3}, o3c::UInt32);
