@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/flat_hash.h"
+#include "core/mesh_edges.h"
 #include "reconstruct/cube_table.h"
 #include "reconstruct/mesh_field.h"
 #include "reconstruct/signed_distance.h"
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <future>
 #include <memory>
 #include <numeric>
 
@@ -393,17 +395,9 @@ void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
 class SignHazards {
  public:
   SignHazards(const TriangleMesh& mesh, const std::vector<Triangle>& patches) {
-    std::vector<std::uint64_t> edges;
-    edges.reserve(mesh.triangles.size() * 3);
-    for (const Triangle& t : mesh.triangles)
-      for (int k = 0; k < 3; ++k) edges.push_back(edge_key(t[k], t[(k + 1) % 3]));
-    std::sort(edges.begin(), edges.end());
-    for (std::size_t i = 0; i < edges.size();) {
-      std::size_t j = i + 1;
-      while (j < edges.size() && edges[j] == edges[i]) ++j;
-      if (j - i == 1) add_segment(mesh.positions[edges[i] >> 32], mesh.positions[edges[i] & 0xffffffffu]);
-      i = j;
-    }
+    const MeshEdges edges = mesh_edges(mesh.triangles, mesh.positions.size());
+    for (std::size_t e = 0; e < edges.size(); ++e)
+      if (edges.uses[e] == 1) add_segment(mesh.positions[std::size_t(edges.ends[e][0])], mesh.positions[std::size_t(edges.ends[e][1])]);
     for (const Triangle& t : patches)
       for (int k = 0; k < 3; ++k) {
         add_segment(mesh.positions[t[k]], mesh.positions[t[(k + 1) % 3]]);
@@ -809,7 +803,18 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
 }
 
 McOctree build_mc_octree(const Reconstruction& reconstruction, const OctreeOptions& options) {
-  return build_mc_octree(reconstruction.leaves, reconstruction.mesh, mesh_distance_field(reconstruction.mesh), options);
+  // The field's setup and its first query, which builds Open3D's BVH, take a
+  // quarter of a second at R = 256: on a second thread they overlap the
+  // octree's skeleton, which needs no field.
+  const TriangleMesh& mesh = reconstruction.mesh;
+  std::shared_future<SignedDistanceField> ready = std::async(std::launch::async, [&mesh] {
+                                                    SignedDistanceField field = mesh_distance_field(mesh);
+                                                    std::vector<float> d;
+                                                    if (!mesh.positions.empty()) field({mesh.positions.front()}, &d);
+                                                    return field;
+                                                  }).share();
+  const SignedDistanceField field = [ready](const std::vector<Vec3f>& q, std::vector<float>* d) { ready.get()(q, d); };
+  return build_mc_octree(reconstruction.leaves, mesh, field, options);
 }
 
 }  // namespace scan2lod
