@@ -2,7 +2,7 @@
 // plus upload per move on the bunny at R = 256). Drives the real Viewer
 // off-screen through its slider widget, like `scan2lod view --script`, over
 // levels from 100 % down to 1 % and back, and reports per move:
-//   extract  extract_lod + compact_lod (LevelSource, as `scan2lod extract`)
+//   extract  the level's triangles (LevelSource::triangles_at: a LodCursor's move)
 //   to VTK   the plain mesh copied into vtkPolyData
 //   render   the first render after the change: buffer upload plus drawing
 //   redraw   the same frame again, nothing changed: drawing alone (best of 2)

@@ -5,10 +5,12 @@
 #pragma once
 
 #include "core/types.h"
+#include "lod/lod_cursor.h"
 #include "lod/model_file.h"
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace scan2lod {
@@ -27,10 +29,12 @@ class LevelSource {
   explicit LevelSource(const LodModel& model) : model_(&model) {}
   // The level after `priority` expansions; priority must be <= lod.full().
   Level at_priority(std::size_t priority);
-  // Only the triangles of that level, as extract_lod gives them: indices into
-  // the model's tree.positions (valid until the next call). `seconds` gets
-  // the time of extract_lod. The viewer draws these against the model's whole
-  // vertex array, uploaded once, so a slider move sends only indices.
+  // Only the triangles of that level, extract_lod's in another order: indices
+  // into the model's tree.positions (valid until the next call). They come
+  // from a LodCursor moved from the last call's level, so a slider move costs
+  // in proportion to the expansions it crosses; `seconds` gets that move and
+  // the copy of its live triangles. The viewer draws these against the model's
+  // whole vertex array, uploaded once, so a slider move sends only indices.
   const std::vector<Triangle>& triangles_at(std::size_t priority, double* seconds);
   // priority_for_percent (percent clamped to [0, 100]), then at_priority.
   Level at_percent(double percent);
@@ -44,6 +48,7 @@ class LevelSource {
   const LodModel* model_;
   std::vector<std::uint8_t> scratch_;
   std::vector<Triangle> triangles_;
+  std::optional<LodCursor> cursor_;  // triangles_at's level, made on first use
 };
 
 // The box around every vertex any level can use (all of tree.positions): a

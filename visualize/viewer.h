@@ -1,8 +1,9 @@
 // The interactive viewer (`scan2lod view`): one VTK window on a LOD model, a
 // mesh or a scan set. On a model a slider (vtkSliderWidget) picks the level by
-// percentage of the LOD array or by triangle budget, and every move re-extracts
-// it by reference through the same calls as `scan2lod extract` (LevelSource):
-// nothing is simplified again. Keys switch the drawing (shaded, wireframe,
+// percentage of the LOD array or by triangle budget, and every move takes it
+// by reference, the triangles `scan2lod extract` gives, through a LodCursor
+// that applies only the expansions in between (LevelSource): nothing is
+// simplified again. Keys switch the drawing (shaded, wireframe,
 // shaded with edges, points, vertex colour), show the octree cells of the
 // current cut coloured by level, and split the window into two levels under
 // one camera. A scan set shows each range image's oriented points in its own
@@ -64,7 +65,7 @@ struct ViewerState {
   std::size_t priority = 0;
   std::size_t triangles = 0;  // polygons in the displayed poly data
   std::size_t vertices = 0;   // points in the displayed poly data
-  double extract_ms = 0;      // extract_lod + compact_lod of the last level change
+  double extract_ms = 0;      // taking the last level change's triangles (LevelSource::triangles_at)
   double convert_ms = 0;      // plain mesh -> vtkPolyData
   double render_ms = 0;       // the first render after the change: upload and draw
   DrawMode mode = DrawMode::shaded;
