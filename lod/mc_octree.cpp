@@ -560,7 +560,13 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     std::vector<std::uint64_t> current = edges;  // edge key at the level being walked
     std::vector<std::size_t> open(edges.size());
     std::iota(open.begin(), open.end(), 0);
-    std::vector<std::vector<std::uint64_t>> path(edges.size());
+    struct Step {
+      std::size_t edge;
+      int level;
+      std::uint64_t key;  // the half the walk took, an edge of `level`
+    };
+    std::vector<Step> steps;  // every walk's halves, to remember once resolved
+    steps.reserve(edges.size());
     for (int l = level; l < depth && !open.empty(); ++l) {
       const int half_shift = depth - l - 1;
       std::vector<std::uint64_t> mids;
@@ -582,7 +588,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
         const std::uint64_t mid = lower + (kAxisStep[axis] << half_shift);
         const std::uint64_t half_lower = distances.inside(lower) != distances.inside(mid) ? lower : mid;
         current[i] = (half_lower << 2) | std::uint64_t(axis);
-        path[i].push_back(current[i]);
+        steps.push_back({i, l + 1, current[i]});
         const std::int32_t known = edge_memo[l + 1].find(current[i]);
         if (known >= 0) (*out)[i] = known;
         else still.push_back(i);
@@ -608,10 +614,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
       }
       (*out)[i] = v;
     }
-    for (std::size_t i = 0; i < edges.size(); ++i) {
-      edge_memo[level].insert(edges[i], (*out)[i]);
-      for (std::size_t k = 0; k < path[i].size(); ++k) edge_memo[level + 1 + k].insert(path[i][k], (*out)[i]);
-    }
+    for (std::size_t i = 0; i < edges.size(); ++i) edge_memo[level].insert(edges[i], (*out)[i]);
+    for (const Step& step : steps) edge_memo[step.level].insert(step.key, (*out)[step.edge]);
   };
 
   // Cases, edge vertices and triangles, level by level from the leaves up.
