@@ -70,6 +70,7 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
   return pinned;
 }
 
+
 // A queue entry: class (2 pinned, 1 free, 0 other), then metric, then node
 // (deeper nodes have larger indices).
 struct Key {
@@ -182,9 +183,12 @@ LodArray number_nodes(const McOctree& tree) {
       triangles += current[child] = count(child);
       enter_cut(child);
     }
+    // Only the cut nodes across a face or an edge re-triangulate: a finer node
+    // across a corner alone splits nothing (lod/transition.h).
     if (std::size_t(node) < tree.internal_nodes())
-      for (std::int32_t q : tree.neighbours[node])
-        if (q >= 0 && q != node && !expanded[q] && expanded[tree.parents[q]]) {
+      for (const int c : splitting_cells())
+        if (const std::int32_t q = tree.neighbours[node][std::size_t(c)];
+            q >= 0 && !expanded[q] && expanded[tree.parents[q]]) {
           const std::int32_t now = count(q);
           triangles += now - current[q];
           current[q] = now;

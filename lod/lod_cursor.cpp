@@ -3,7 +3,6 @@
 #include "lod/extract.h"
 
 #include <algorithm>
-#include <array>
 #include <cassert>
 
 namespace scan2lod {
@@ -14,19 +13,6 @@ constexpr std::uint8_t kExpanded = 1, kDirty = 2;
 
 // slot_owner_ beyond block ids.
 constexpr std::int32_t kHole = -1, kInside = -2;
-
-// The cells around a node whose finer node splits one of its faces or edges
-// (lod/transition.h): one or two offsets nonzero. A node across a corner
-// alone changes nothing, so those 8 cells are left out.
-const auto kSplittingCells = [] {
-  std::array<int, 18> cells{};
-  int n = 0;
-  for (int c = 0; c < 27; ++c) {
-    const int offsets = (c % 3 != 1) + (c / 3 % 3 != 1) + (c / 9 != 1);
-    if (offsets == 1 || offsets == 2) cells[std::size_t(n++)] = c;
-  }
-  return cells;
-}();
 
 // A move rebuilds the cut when that cut has fewer than this many nodes per
 // expansion or collapse. A re-emitted node (its data scattered over the tree)
@@ -181,7 +167,7 @@ void LodCursor::mark_around(std::int32_t node) {
   mark(node);
   for (std::int32_t c = tree_->first_child[n], end = c + tree_->child_counts[n]; c < end; ++c) mark(c);
   const auto& around = tree_->neighbours[n];  // expanded nodes are internal
-  for (const int c : kSplittingCells)
+  for (const int c : splitting_cells())
     if (around[std::size_t(c)] >= 0) mark(around[std::size_t(c)]);
 }
 

@@ -76,6 +76,19 @@ const Tables& tables() {
 
 const std::array<SubEdge, kSubEdges>& transition_sub_edges() { return tables().sub_edges; }
 
+const std::array<int, 18>& splitting_cells() {
+  static const auto cells = [] {
+    std::array<int, 18> found{};
+    int n = 0;
+    for (int c = 0; c < 27; ++c) {
+      const int offsets = (c % 3 != 1) + (c / 3 % 3 != 1) + (c / 9 != 1);
+      if (offsets == 1 || offsets == 2) found[std::size_t(n++)] = c;
+    }
+    return found;
+  }();
+  return cells;
+}
+
 int lattice_of_corner(int c) { return lattice((c & 1) * 2, ((c >> 1) & 1) * 2, ((c >> 2) & 1) * 2); }
 
 namespace {

@@ -35,6 +35,12 @@ const std::array<SubEdge, kSubEdges>& transition_sub_edges();
 // Local lattice point of node corner c (corner numbering of cube_table.h).
 int lattice_of_corner(int c);
 
+// The 18 cells around a node (index (dx+1) + 3 (dy+1) + 9 (dz+1), as in
+// McOctree::neighbours) across one of its faces or edges. Only a finer node
+// in one of these changes the node's triangulation: one across a corner
+// alone splits nothing.
+const std::array<int, 18>& splitting_cells();
+
 // Everything a node needs to triangulate itself against finer neighbours.
 struct TransitionInput {
   std::uint32_t inside;                          // bit p: lattice point p is inside
