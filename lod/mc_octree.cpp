@@ -508,14 +508,24 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   tree.triangle_counts.assign(n, 0);
   tree.metrics.assign(n, 0.f);
 
-  // Leaf vertices by grid edge (lower lattice corner, axis).
-  FlatHashMap edge_vertex(leaves.size() * 2);
-  for (std::size_t l = 0; l < leaves.size(); ++l)
-    for (int e = 0; e < 12; ++e)
-      if (leaves.edge_vertices[l][e] >= 0) {
-        const std::uint64_t lower = corner_lattice_key(leaves.cube_keys[l], 0, edge_corner(e, 0));
-        edge_vertex.insert((lower << 2) | std::uint64_t(e / 4), leaves.edge_vertices[l][e]);
-      }
+  // The vertex on a leaf-lattice edge (lower corner << 2 | axis): the vertex
+  // of a leaf around that edge, else one added on it earlier, else -1. Only
+  // walks that reach the leaves ask, so the up to four leaves are looked up
+  // then rather than every leaf edge indexed beforehand.
+  FlatHashMap added_on_edge(1024);
+  auto edge_vertex = [&](std::uint64_t edge) {
+    int x, y, z;
+    unpack_key(edge >> 2, &x, &y, &z);
+    const int axis = int(edge & 3);
+    for (int e = 4 * axis; e < 4 * axis + 4; ++e) {
+      const int c = edge_corner(e, 0);  // the edge's lower end, as a corner of the cube
+      const int cx = x - (c & 1), cy = y - ((c >> 1) & 1), cz = z - ((c >> 2) & 1);
+      if (cx < 0 || cy < 0 || cz < 0) continue;
+      const std::int32_t l = leaf_index.find(pack_key(std::uint64_t(cx), std::uint64_t(cy), std::uint64_t(cz)));
+      if (l >= 0 && leaves.edge_vertices[std::size_t(l)][e] >= 0) return leaves.edge_vertices[std::size_t(l)][e];
+    }
+    return added_on_edge.find(edge);
+  };
 
   LatticeSigns distances(leaves, field, dropped_corners(leaves, mesh));
   // A point in a child cube the tree lacks has no leaf around it: no surface
@@ -616,7 +626,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     }
     for (std::size_t i : open) {
       // A leaf edge: the mesh's vertex, or one interpolated where no leaf has it.
-      std::int32_t v = edge_vertex.find(current[i]);
+      std::int32_t v = edge_vertex(current[i]);
       if (v < 0) {
         const std::uint64_t lower = current[i] >> 2;
         const int axis = int(current[i] & 3);
@@ -629,7 +639,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
         p[axis] += t * float(tree.grid.cube_size);
         v = std::int32_t(tree.positions.size());
         tree.positions.push_back(p);
-        edge_vertex.insert(current[i], v);
+        added_on_edge.insert(current[i], v);
       }
       (*out)[i] = v;
     }
