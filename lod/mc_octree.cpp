@@ -527,7 +527,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     return added_on_edge.find(edge);
   };
 
-  LatticeSigns distances(leaves, field, dropped_corners(leaves, mesh));
+  const std::vector<std::uint8_t> dropped = dropped_corners(leaves, mesh);
+  LatticeSigns distances(leaves, field, dropped);
   // A point in a child cube the tree lacks has no leaf around it: no surface
   // crosses that cube, so the point takes the sign of the cube's corner at the
   // parent's centre, which the parent's children already hold (Fig. 5.2 gives
@@ -647,6 +648,10 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     for (const Step& step : steps) edge_memo[step.level].insert(step.key, (*out)[step.edge]);
   };
 
+  // Whether a node's case bits are the lattice's signs at its corners: all but
+  // leaves with a corner the field decided (a dropped one).
+  std::vector<std::uint8_t> cases_are_signs(n, 1);
+
   // Cases, edge vertices and triangles, level by level from the leaves up.
   for (int level = depth; level >= 0; --level) {
     const int shift = depth - level;
@@ -689,6 +694,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     for (std::int32_t node = begin; node < end; ++node) {
       const CubeCase& cc = table[tree.cases[node]];
       const std::int32_t l = level == depth ? leaf_index.find(tree.keys[node]) : -1;
+      if (l >= 0)
+        for (std::int32_t corner : leaves.corners[std::size_t(l)]) cases_are_signs[std::size_t(node)] &= !dropped[std::size_t(corner)];
       tree.first_triangle[node] = std::int32_t(tree.triangles.size());
       for (int t = 0; t < cc.triangle_count; ++t) {
         if (l >= 0 && !(leaves.triangle_masks[l] >> t & 1)) continue;
@@ -716,28 +723,49 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   for (int level = 0; level < depth; ++level) {
     const int shift = depth - level;
     const std::int32_t begin = level_begin[level], end = level_begin[level + 1];
+    // The 27 points are the children's corners: an existing child's case
+    // gives its 8 signs; the lattice only the rest.
+    std::vector<std::uint32_t> covered(std::size_t(end - begin), 0);
     std::vector<std::uint64_t> points;
     std::vector<std::int32_t> point_nodes;
-    points.reserve(std::size_t(end - begin) * 27);
-    point_nodes.reserve(std::size_t(end - begin) * 27);
-    for (std::int32_t node = begin; node < end; ++node)
-      for (int p = 0; p < 27; ++p) {
-        points.push_back(lattice_key(tree.keys[node], shift, p));
-        point_nodes.push_back(node);
+    for (std::int32_t node = begin; node < end; ++node) {
+      int x, y, z;
+      unpack_key(tree.keys[node], &x, &y, &z);
+      std::uint32_t known = 0, inside = 0;
+      for (std::int32_t c = tree.first_child[node], stop = c + tree.child_counts[node]; c < stop; ++c) {
+        if (!cases_are_signs[std::size_t(c)]) continue;
+        int cx, cy, cz;
+        unpack_key(tree.keys[std::size_t(c)], &cx, &cy, &cz);
+        const int octant = (cx - 2 * x) + 3 * (cy - 2 * y) + 9 * (cz - 2 * z);  // its lowest lattice point
+        for (int k = 0; k < 8; ++k) {
+          const int p = octant + (k & 1) + 3 * ((k >> 1) & 1) + 9 * ((k >> 2) & 1);
+          known |= 1u << p;
+          inside |= std::uint32_t((tree.cases[std::size_t(c)] >> k) & 1) << p;
+        }
       }
+      covered[std::size_t(node - begin)] = known;
+      tree.boundary_inside[node] = inside;
+      for (int p = 0; p < 27; ++p)
+        if (!((known >> p) & 1)) {
+          points.push_back(lattice_key(tree.keys[node], shift, p));
+          point_nodes.push_back(node);
+        }
+    }
     distances.ensure(points, &point_nodes);
     std::vector<std::uint64_t> edges;
     std::vector<std::pair<std::int32_t, int>> slots;
+    std::size_t next_point = 0;
     for (std::int32_t node = begin; node < end; ++node) {
-      std::uint32_t inside = 0;
-      for (int p = 0; p < 27; ++p) inside |= std::uint32_t(distances.inside(points[std::size_t(node - begin) * 27 + p])) << p;
+      std::uint32_t inside = tree.boundary_inside[node];
+      for (int p = 0; p < 27; ++p)
+        if (!((covered[std::size_t(node - begin)] >> p) & 1)) inside |= std::uint32_t(distances.inside(points[next_point++])) << p;
       tree.boundary_inside[node] = inside;
       tree.sub_edge_vertices[node].fill(-1);
       for (int e = 0; e < kSubEdges; ++e) {
         const SubEdge& se = sub_edges[e];
         if (((inside >> se.a) & 1) == ((inside >> se.b) & 1)) continue;
         const int axis = (se.b - se.a) == 1 ? 0 : (se.b - se.a) == 3 ? 1 : 2;
-        edges.push_back((points[std::size_t(node - begin) * 27 + se.a] << 2) | std::uint64_t(axis));
+        edges.push_back((lattice_key(tree.keys[node], shift, se.a) << 2) | std::uint64_t(axis));
         slots.push_back({node, e});
       }
       int x, y, z;
