@@ -732,7 +732,8 @@ void report_notes(Report& r, const Settings& s, const RunInfo& info, const std::
                           .c_str(),
         s.timeout, info.baseline_mib);
   r.add("- scan2lod: default `ReconstructOptions` apart from R = %d, all %ld threads for `reconstruct()` and the "
-        "octree's field; `number_nodes` and extraction are single-threaded. Levels are `priority_for_percent(p)`, "
+        "octree's field; `number_nodes` is single-threaded, `extract_lod` runs on all of them from 1,024 expansions "
+        "on (ordered chunks, the same output as one thread). Levels are `priority_for_percent(p)`, "
         "i.e. the largest offered priority (`monotone_priorities`) at or below p %% of the LOD array. "
         "`extract_lod` was timed at least %d times and for at least 0.25 s per level with its scratch vectors "
         "reused (the first, sizing call untimed); `compact_lod` adds building a self-contained mesh. The peers' "
