@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <queue>
 
 namespace scan2lod {
@@ -69,7 +68,6 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
   }
   return pinned;
 }
-
 
 // A queue entry: class (2 pinned, 1 free, 0 other), then metric, then node
 // (deeper nodes have larger indices).

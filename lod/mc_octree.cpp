@@ -535,7 +535,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   };
 
   const std::vector<std::uint8_t> dropped = dropped_corners(leaves, mesh);
-  LatticeSigns distances(leaves, field, dropped);
+  LatticeSigns signs(leaves, field, dropped);
   // A point in a child cube the tree lacks has no leaf around it: no surface
   // crosses that cube, so the point takes the sign of the cube's corner at the
   // parent's centre, which the parent's children already hold (Fig. 5.2 gives
@@ -546,7 +546,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   const SignHazards hazards(mesh, leaves.patch_triangles);
   std::vector<std::int8_t> centre_usable(n, 0);  // 1 yes, -1 no, 0 not yet known
   const double cell = tree.grid.cube_size;
-  distances.set_inference([&](std::uint64_t key, std::int32_t node, bool* inside) {
+  signs.set_inference([&](std::uint64_t key, std::int32_t node, bool* inside) {
     int px, py, pz;
     unpack_key(key, &px, &py, &pz);
     for (;;) {  // down to the deepest node holding the point
@@ -568,7 +568,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     const int half = 1 << (shift - 1);
     const int cx = (x << shift) + half, cy = (y << shift) + half, cz = (z << shift) + half;
     const std::uint64_t centre = pack_key(cx, cy, cz);
-    if (!distances.known(centre)) return false;
+    if (!signs.known(centre)) return false;
     std::int8_t& usable = centre_usable[std::size_t(node)];
     if (usable == 0) {
       // Every point of the child cube is within its diagonal of the centre,
@@ -576,12 +576,12 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
       // child's diagonal of the surface (unless the field said nearer).
       const double diagonal = std::sqrt(3.0) * cell * half;
       float v = 0.f;
-      const double to_surface = distances.value(centre, &v) ? std::fabs(v) : diagonal;
+      const double to_surface = signs.value(centre, &v) ? std::fabs(v) : diagonal;
       usable = hazards.farther_than(tree.grid.corner_position(cx, cy, cz), to_surface + 2.0 * diagonal + 2.0 * cell)
                    ? 1 : -1;
     }
     if (usable < 0) return false;
-    *inside = distances.inside(centre);
+    *inside = signs.inside(centre);
     return true;
   });
   const auto& table = cube_cases();
@@ -591,8 +591,10 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
 
   // The vertex on each given level-`level` edge whose ends' signs differ: the
   // half that changes sign, recursively, down to a leaf edge.
-  auto resolve_edges = [&](int level, const std::vector<std::uint64_t>& edges, const std::vector<std::int32_t>& owners,
-                           std::vector<std::int32_t>* out) {
+  // slots[i].first: the node whose edge or sub-edge edges[i] is, which holds
+  // the points its walk asks signs of.
+  auto resolve_edges = [&](int level, const std::vector<std::uint64_t>& edges,
+                           const std::vector<std::pair<std::int32_t, int>>& slots, std::vector<std::int32_t>* out) {
     out->assign(edges.size(), -1);
     std::vector<std::uint64_t> current = edges;  // edge key at the level being walked
     std::vector<std::size_t> open(edges.size());
@@ -615,15 +617,15 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
         const int axis = int(current[i] & 3);
         mids.push_back(lower);
         mids.push_back(lower + (kAxisStep[axis] << half_shift));
-        mid_nodes.insert(mid_nodes.end(), 2, owners[i]);
+        mid_nodes.insert(mid_nodes.end(), 2, slots[i].first);
       }
-      distances.ensure(mids, &mid_nodes);
+      signs.ensure(mids, &mid_nodes);
       std::vector<std::size_t> still;
       for (std::size_t i : open) {
         const std::uint64_t lower = current[i] >> 2;
         const int axis = int(current[i] & 3);
         const std::uint64_t mid = lower + (kAxisStep[axis] << half_shift);
-        const std::uint64_t half_lower = distances.inside(lower) != distances.inside(mid) ? lower : mid;
+        const std::uint64_t half_lower = signs.inside(lower) != signs.inside(mid) ? lower : mid;
         current[i] = (half_lower << 2) | std::uint64_t(axis);
         steps.push_back({i, l + 1, current[i]});
         const std::int32_t known = edge_memo[l + 1].find(current[i]);
@@ -639,7 +641,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
         const std::uint64_t lower = current[i] >> 2;
         const int axis = int(current[i] & 3);
         const std::uint64_t upper = lower + kAxisStep[axis];
-        const float da = distances.exact(lower), db = distances.exact(upper);
+        const float da = signs.exact(lower), db = signs.exact(upper);
         const float t = std::clamp(std::fabs(da) / (std::fabs(da) + std::fabs(db)), 1e-4f, 1.f - 1e-4f);
         int x, y, z;
         unpack_key(lower, &x, &y, &z);
@@ -679,12 +681,12 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
           corners.push_back(corner_lattice_key(tree.keys[node], shift, c));
           corner_nodes.push_back(node);
         }
-      distances.ensure(corners, &corner_nodes);
+      signs.ensure(corners, &corner_nodes);
       std::vector<std::uint64_t> edges;
       std::vector<std::pair<std::int32_t, int>> slots;
       for (std::int32_t node = begin; node < end; ++node) {
         std::uint8_t mask = 0;
-        for (int c = 0; c < 8; ++c) mask |= std::uint8_t(distances.inside(corners[std::size_t(node - begin) * 8 + c])) << c;
+        for (int c = 0; c < 8; ++c) mask |= std::uint8_t(signs.inside(corners[std::size_t(node - begin) * 8 + c])) << c;
         tree.cases[node] = mask;
         tree.edge_vertices[node].fill(-1);
         for (int e = 0; e < 12; ++e) {
@@ -693,9 +695,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
           slots.push_back({node, e});
         }
       }
-      std::vector<std::int32_t> vertices, owners(slots.size());
-      for (std::size_t i = 0; i < slots.size(); ++i) owners[i] = slots[i].first;
-      resolve_edges(level, edges, owners, &vertices);
+      std::vector<std::int32_t> vertices;
+      resolve_edges(level, edges, slots, &vertices);
       for (std::size_t i = 0; i < slots.size(); ++i) tree.edge_vertices[slots[i].first][slots[i].second] = vertices[i];
     }
     for (std::int32_t node = begin; node < end; ++node) {
@@ -758,14 +759,14 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
           point_nodes.push_back(node);
         }
     }
-    distances.ensure(points, &point_nodes);
+    signs.ensure(points, &point_nodes);
     std::vector<std::uint64_t> edges;
     std::vector<std::pair<std::int32_t, int>> slots;
     std::size_t next_point = 0;
     for (std::int32_t node = begin; node < end; ++node) {
       std::uint32_t inside = tree.boundary_inside[node];
       for (int p = 0; p < 27; ++p)
-        if (!((covered[std::size_t(node - begin)] >> p) & 1)) inside |= std::uint32_t(distances.inside(points[next_point++])) << p;
+        if (!((covered[std::size_t(node - begin)] >> p) & 1)) inside |= std::uint32_t(signs.inside(points[next_point++])) << p;
       tree.boundary_inside[node] = inside;
       tree.sub_edge_vertices[node].fill(-1);
       for (int e = 0; e < kSubEdges; ++e) {
@@ -799,9 +800,8 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
         tree.neighbours[node][c] = found;
       }
     }
-    std::vector<std::int32_t> vertices, owners(slots.size());
-    for (std::size_t i = 0; i < slots.size(); ++i) owners[i] = slots[i].first;
-    resolve_edges(level + 1, edges, owners, &vertices);
+    std::vector<std::int32_t> vertices;
+    resolve_edges(level + 1, edges, slots, &vertices);
     for (std::size_t i = 0; i < slots.size(); ++i) tree.sub_edge_vertices[slots[i].first][slots[i].second] = vertices[i];
   }
 
