@@ -81,6 +81,16 @@ int node_triangle_count(const McOctree& tree, std::int32_t node, const std::vect
   return transition_of(tree, node, expanded, &in) ? transition_triangle_count(in) : tree.triangle_counts[node];
 }
 
+void mark_cut(const McOctree& tree, const LodArray& lod, std::size_t priority, std::uint8_t* flags) {
+  if (priority == 0) flags[0] = kCut;
+  for (std::size_t i = 0; i < priority; ++i) flags[lod.order[i]] = kExpanded;
+  for (std::size_t i = 0; i < priority; ++i) {
+    const std::int32_t node = lod.order[i];
+    for (std::int32_t c = tree.first_child[node], end = c + tree.child_counts[node]; c < end; ++c)
+      if (!(flags[c] & kExpanded)) flags[c] = kCut;
+  }
+}
+
 void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,
                  std::vector<std::uint8_t>* expanded, std::vector<Triangle>* triangles) {
   priority = std::min(priority, lod.full());
@@ -92,12 +102,7 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
     return;
   }
   std::uint8_t* flags = expanded->data();
-  for (std::size_t i = 0; i < priority; ++i) flags[lod.order[i]] = kExpanded;
-  for (std::size_t i = 0; i < priority; ++i) {
-    const std::int32_t node = lod.order[i];
-    for (std::int32_t c = tree.first_child[node], end = c + tree.child_counts[node]; c < end; ++c)
-      if (!(flags[c] & kExpanded)) flags[c] = kCut;
-  }
+  mark_cut(tree, lod, priority, flags);
   // The cut in node order rather than LOD order: neighbouring nodes' data sit
   // together, which made extraction up to 2x faster at levels with many
   // transitions; the scan over all node flags costs about as much as a copy.

@@ -16,6 +16,11 @@ namespace scan2lod {
 void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,
                  std::vector<std::uint8_t>* expanded, std::vector<Triangle>* triangles);
 
+// Marks the level after `priority` expansions in `flags` (tree.size(), all
+// zero on entry): 1 for the expanded nodes, 2 for the nodes of the cut below
+// them (the root alone at priority 0).
+void mark_cut(const McOctree& tree, const LodArray& lod, std::size_t priority, std::uint8_t* flags);
+
 // Appends the triangles of one node of the cut, given which nodes are expanded
 // (bit 0 of their flag):
 // its own, or, beside expanded cells, its transition triangulation.

@@ -8,7 +8,8 @@
 namespace scan2lod {
 namespace {
 
-// flags_ bits: emit_node reads bit 0 alone, so bit 1 can mark nodes to re-emit.
+// flags_ bits: emit_node reads bit 0 alone, so bit 1 can mark nodes to re-emit
+// (the values mark_cut writes).
 constexpr std::uint8_t kExpanded = 1, kDirty = 2;
 
 // slot_owner_ beyond block ids.
@@ -95,17 +96,10 @@ void LodCursor::rebuild(std::size_t priority) {
   buffer_.clear();
   slot_owner_.clear();
   holes_ = 0;
-  // The cut as extract_lod finds it (kDirty marking it here), then emitted in
+  // The cut as extract_lod finds it (mark_cut's 2 is kDirty), then emitted in
   // node order, where neighbouring nodes' data sit together.
   std::fill(flags_.begin(), flags_.end(), 0);
-  const std::vector<std::int32_t>& order = lod_->order;
-  for (std::size_t i = 0; i < priority; ++i) flags_[std::size_t(order[i])] = kExpanded;
-  if (priority == 0) flags_[0] = kDirty;
-  for (std::size_t i = 0; i < priority; ++i) {
-    const std::size_t node = std::size_t(order[i]);
-    for (std::int32_t c = tree.first_child[node], end = c + tree.child_counts[node]; c < end; ++c)
-      if (!(flags_[std::size_t(c)] & kExpanded)) flags_[std::size_t(c)] = kDirty;
-  }
+  mark_cut(tree, *lod_, priority, flags_.data());
   priority_ = priority;
   for (std::size_t node = 0; node < tree.size(); ++node) {
     if (flags_[node] != kDirty) continue;
