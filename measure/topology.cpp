@@ -1,6 +1,7 @@
 #include "measure/topology.h"
 
 #include "core/error.h"
+#include "core/mesh_edges.h"
 
 #include <Eigen/Geometry>
 
@@ -95,39 +96,30 @@ MeshTopology mesh_topology(const TriangleMesh& mesh) {
   topo.triangles = mesh.triangles.size();
 
   std::vector<char> referenced(mesh.positions.size(), 0);
-  std::vector<std::uint64_t> keys;
-  keys.reserve(3 * mesh.triangles.size());
-  std::size_t surface_triangles = 0;
+  std::vector<Triangle> surface;  // without collapsed triangles, which bound nothing
+  surface.reserve(mesh.triangles.size());
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
     if (triangle_is_degenerate(mesh, i)) ++topo.degenerate_triangles;
     const Triangle& t = mesh.triangles[i];
     if (collapsed(t)) continue;
-    ++surface_triangles;
-    for (int k = 0; k < 3; ++k) {
-      referenced[t[k]] = 1;
-      keys.push_back(edge_key(t[k], t[(k + 1) % 3]));
-    }
+    surface.push_back(t);
+    for (std::int32_t v : t) referenced[v] = 1;
   }
   topo.referenced_vertices = std::size_t(std::count(referenced.begin(), referenced.end(), 1));
 
-  // Equal keys are adjacent after sorting, so a run's length is the number of
-  // triangles on that edge; no hash map needed.
-  std::sort(keys.begin(), keys.end());
+  const MeshEdges edges = mesh_edges(surface, mesh.positions.size());
+  topo.edges = edges.size();
   DisjointSets boundary(mesh.positions.size());
   std::vector<char> on_boundary(mesh.positions.size(), 0);
-  for (std::size_t i = 0; i < keys.size();) {
-    std::size_t j = i + 1;
-    while (j < keys.size() && keys[j] == keys[i]) ++j;
-    ++topo.edges;
-    if (j - i == 1) {
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    if (edges.uses[e] == 1) {
       ++topo.boundary_edges;
-      auto a = std::uint32_t(keys[i] >> 32), b = std::uint32_t(keys[i]);
+      const auto a = std::uint32_t(edges.ends[e][0]), b = std::uint32_t(edges.ends[e][1]);
       boundary.unite(a, b);
       on_boundary[a] = on_boundary[b] = 1;
-    } else if (j - i > 2) {
+    } else if (edges.uses[e] > 2) {
       ++topo.non_manifold_edges;
     }
-    i = j;
   }
   for (std::size_t v = 0; v < on_boundary.size(); ++v)
     if (on_boundary[v] && boundary.find(std::uint32_t(v)) == v) ++topo.boundary_loops;
@@ -141,7 +133,7 @@ MeshTopology mesh_topology(const TriangleMesh& mesh) {
   if (!sizes.empty()) topo.largest_component_triangles = *std::max_element(sizes.begin(), sizes.end());
 
   topo.euler_characteristic =
-      long(topo.referenced_vertices) - long(topo.edges) + long(surface_triangles);
+      long(topo.referenced_vertices) - long(topo.edges) + long(surface.size());
   return topo;
 }
 
