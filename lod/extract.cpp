@@ -13,19 +13,22 @@ int cell(int dx, int dy, int dz) { return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)
 // The cell across each face (axis * 2 + side) of a node.
 const int kFaceCell[6] = {cell(-1, 0, 0), cell(1, 0, 0), cell(0, -1, 0), cell(0, 1, 0), cell(0, 0, -1), cell(0, 0, 1)};
 
-// The three cells around each node edge (numbering of cube_table.h), as a
-// mask of cells.
-const auto kEdgeCells = [] {
-  std::array<std::uint32_t, 12> cells{};
+// For each cell around a node (index as in McOctree::neighbours): the node
+// edges (bits 0-11, numbering of cube_table.h) and the face (bits 12-17,
+// axis * 2 + side) that a finer node there splits.
+const auto kSplits = [] {
+  std::array<std::uint32_t, 27> splits{};
   for (int e = 0; e < 12; ++e) {
     const int axis = e / 4, u = (axis + 1) % 3, v = (axis + 2) % 3;
     int du[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
     du[u] = (e & 1) ? 1 : -1;
     dv[v] = (e & 2) ? 1 : -1;
-    cells[e] = (1u << cell(du[0], du[1], du[2])) | (1u << cell(dv[0], dv[1], dv[2])) |
-               (1u << cell(du[0] + dv[0], du[1] + dv[1], du[2] + dv[2]));
+    for (const int c : {cell(du[0], du[1], du[2]), cell(dv[0], dv[1], dv[2]),
+                        cell(du[0] + dv[0], du[1] + dv[1], du[2] + dv[2])})
+      splits[std::size_t(c)] |= 1u << e;
   }
-  return cells;
+  for (int f = 0; f < 6; ++f) splits[std::size_t(kFaceCell[f])] |= 1u << (12 + f);
+  return splits;
 }();
 
 // Marks in extract_lod's scratch: bit 0 expanded, bit 1 in the cut.
@@ -34,6 +37,8 @@ constexpr std::uint8_t kExpanded = 1, kCut = 2;
 // Levels from this many expansions on are emitted by all cores.
 constexpr std::size_t kParallelFrom = 1024;
 constexpr int kChunks = 32;
+// ... and from this many, their cut is marked by all cores too.
+constexpr std::size_t kTeamMarksFrom = 8192;
 
 }  // namespace
 
@@ -46,24 +51,73 @@ bool transition_of(const McOctree& tree, std::int32_t node, const std::vector<st
   if (std::size_t(node) >= tree.internal_nodes()) return false;
   // A node beside expanded cells is triangulated against the finer nodes there.
   const auto& around = tree.neighbours[node];
-  std::uint32_t fine = 0;
+  std::uint32_t splits = 0;
   // Branch-free: whether a cell is empty or expanded is as good as random.
   const std::uint8_t* flags = expanded.data();
-  for (int c = 0; c < 27; ++c) {
-    const std::int32_t a = around[c];
-    fine |= std::uint32_t(flags[std::max(a, 0)] & kExpanded & std::uint8_t(a >= 0)) << c;
+  for (const int c : splitting_cells()) {
+    const std::int32_t a = around[std::size_t(c)];
+    const std::uint32_t fine = flags[std::max(a, 0)] & kExpanded & std::uint8_t(a >= 0);
+    splits |= kSplits[std::size_t(c)] & (0u - fine);
   }
-  fine &= ~(1u << 13);  // the node itself
-  if (!fine) return false;
-  std::uint16_t edges = 0;
-  for (int e = 0; e < 12; ++e)
-    if (fine & kEdgeCells[e]) edges |= std::uint16_t(1u << e);
-  if (!edges) return false;
-  std::uint8_t faces = 0;
-  for (int f = 0; f < 6; ++f) faces |= std::uint8_t((fine >> kFaceCell[f]) & 1) << f;
+  if (!splits) return false;
+  const std::uint16_t edges = std::uint16_t(splits & 0xfff);
+  const std::uint8_t faces = std::uint8_t(splits >> 12);
   *in = TransitionInput{tree.boundary_inside[node], tree.edge_vertices[node].data(),
                         tree.sub_edge_vertices[node].data(), tree.centre_vertices[node], faces, edges};
   return true;
+}
+
+// Appends the triangles of the cut's nodes in [begin, end).
+// - Nodes that emit their own triangles mostly sit next to each other with
+//   their triangles stored back to back (siblings, and leaves in node order),
+//   so runs of them go out as one copy: per-node inserts were a sixth of the
+//   time at 100 %.
+// - A transition's cached triangulation is a cache miss away; it is asked for
+//   a few nodes ahead and emitted when its turn comes, in node order.
+void emit_range(const McOctree& tree, const std::vector<std::uint8_t>& marks, std::size_t begin, std::size_t end,
+                std::vector<Triangle>* triangles) {
+  const Triangle* own = tree.triangles.data();
+  struct Pending {
+    TransitionInput in;           // when run_end < 0
+    std::int32_t run_begin = 0;   // else own triangles [run_begin, run_end)
+    std::int32_t run_end = 0;
+  };
+  constexpr unsigned kAhead = 8;  // a power of two
+  Pending queue[kAhead];
+  unsigned head = 0, tail = 0;  // pending: [head, tail), modulo kAhead
+  auto emit_front = [&] {
+    const Pending& p = queue[head++ % kAhead];
+    if (p.run_end < 0)
+      triangulate_transition(p.in, triangles);
+    else
+      triangles->insert(triangles->end(), own + p.run_begin, own + p.run_end);
+  };
+  auto push = [&]() -> Pending& {
+    if (tail - head == kAhead) emit_front();
+    return queue[tail++ % kAhead];
+  };
+  bool in_run = false;  // the newest pending entry is a run still growing
+  for (std::size_t node = begin; node < end; ++node) {
+    if (marks[node] != kCut) continue;
+    TransitionInput in;
+    if (transition_of(tree, std::int32_t(node), marks, &in)) {
+      prefetch_transition(in);
+      Pending& p = push();
+      p.in = in;
+      p.run_end = -1;
+      in_run = false;
+      continue;
+    }
+    const std::int32_t first = tree.first_triangle[node];
+    Pending* last = in_run ? &queue[(tail - 1) % kAhead] : nullptr;
+    if (!last || last->run_end != first) {
+      last = &push();
+      last->run_begin = first;
+      in_run = true;
+    }
+    last->run_end = first + tree.triangle_counts[node];
+  }
+  while (head != tail) emit_front();
 }
 
 }  // namespace
@@ -81,64 +135,114 @@ int node_triangle_count(const McOctree& tree, std::int32_t node, const std::vect
   return transition_of(tree, node, expanded, &in) ? transition_triangle_count(in) : tree.triangle_counts[node];
 }
 
-void mark_cut(const McOctree& tree, const LodArray& lod, std::size_t priority, std::uint8_t* flags) {
-  if (priority == 0) flags[0] = kCut;
-  for (std::size_t i = 0; i < priority; ++i) flags[lod.order[i]] = kExpanded;
-  for (std::size_t i = 0; i < priority; ++i) {
+namespace {
+
+// mark_cut in two passes over entries [begin, end) of the LOD array; a pass
+// over every entry must finish before the second starts. Each node is written
+// by one entry in each pass (the parent of a cut node is the only expansion
+// that marks it), so disjoint ranges can run at once.
+void mark_expanded(const LodArray& lod, std::size_t begin, std::size_t end, std::uint8_t* flags) {
+  for (std::size_t i = begin; i < end; ++i) flags[lod.order[i]] = kExpanded;
+}
+
+void mark_children(const McOctree& tree, const LodArray& lod, std::size_t begin, std::size_t end,
+                   std::uint8_t* flags) {
+  for (std::size_t i = begin; i < end; ++i) {
     const std::int32_t node = lod.order[i];
-    for (std::int32_t c = tree.first_child[node], end = c + tree.child_counts[node]; c < end; ++c)
+    for (std::int32_t c = tree.first_child[node], end_child = c + tree.child_counts[node]; c < end_child; ++c)
       if (!(flags[c] & kExpanded)) flags[c] = kCut;
   }
+}
+
+}  // namespace
+
+void mark_cut(const McOctree& tree, const LodArray& lod, std::size_t priority, std::uint8_t* flags) {
+  if (priority == 0) flags[0] = kCut;
+  mark_expanded(lod, 0, priority, flags);
+  mark_children(tree, lod, 0, priority, flags);
 }
 
 void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,
                  std::vector<std::uint8_t>* expanded, std::vector<Triangle>* triangles) {
   priority = std::min(priority, lod.full());
-  triangles->clear();
   expanded->resize(tree.size(), 0);
-  auto emit = [&](std::int32_t node) { emit_node(tree, node, *expanded, triangles); };
   if (priority == 0) {
-    emit(0);
+    triangles->clear();
+    emit_node(tree, 0, *expanded, triangles);
     return;
   }
   std::uint8_t* flags = expanded->data();
-  mark_cut(tree, lod, priority, flags);
+  const std::vector<std::uint8_t>& marks = *expanded;
+  // Hole patches show once every node around their rim has expanded.
+  auto append_patches = [&] {
+    for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
+      bool shown = true;
+      for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1] && shown; ++k)
+        shown = flags[tree.patch_needs[k]] & kExpanded;
+      if (shown)
+        triangles->insert(triangles->end(), tree.patch_triangles.begin() + tree.patch_group_first[g],
+                          tree.patch_triangles.begin() + tree.patch_group_first[g + 1]);
+    }
+  };
   // The cut in node order rather than LOD order: neighbouring nodes' data sit
   // together, which made extraction up to 2x faster at levels with many
   // transitions; the scan over all node flags costs about as much as a copy.
   const std::size_t n = tree.size();
   if (priority < kParallelFrom || omp_get_max_threads() < 2) {
-    for (std::size_t node = 0; node < n; ++node)
-      if (flags[node] == kCut) emit(std::int32_t(node));
-  } else {
-    // Chunks of the node range on every core, joined in order, so the output
-    // is the same as one thread's. Transitions sit in the first quarter (nodes
-    // above the leaves come first), hence many chunks, taken dynamically.
-    thread_local std::vector<std::vector<Triangle>> kept;  // capacity kept between calls
-    std::vector<std::vector<Triangle>>& parts = kept;       // this thread's, shared with the workers
-    parts.resize(kChunks);
-    const std::vector<std::uint8_t>& marks = *expanded;
-#pragma omp parallel for schedule(dynamic, 1)
+    mark_cut(tree, lod, priority, flags);
+    triangles->clear();
+    emit_range(tree, marks, 0, n, triangles);
+    append_patches();
+    std::fill(expanded->begin(), expanded->end(), 0);
+    return;
+  }
+  // Chunks of the node range on every core, joined in order, so the output is
+  // the same as one thread's. Transitions sit in the first quarter (nodes
+  // above the leaves come first), hence many chunks, taken dynamically.
+  thread_local std::vector<std::vector<Triangle>> kept;  // capacity kept between calls
+  std::vector<std::vector<Triangle>>& parts = kept;       // this thread's, shared with the workers
+  parts.resize(kChunks);
+  std::size_t offsets[kChunks + 1];
+  // One team for all of it: waking the workers, and every barrier, costs
+  // tens of microseconds under OMP_WAIT_POLICY=passive. Small levels mark
+  // their cut before the team starts, as two more barriers cost more than
+  // marking on both cores saves there.
+  const bool team_marks = priority >= kTeamMarksFrom;
+  if (!team_marks) mark_cut(tree, lod, priority, flags);
+#pragma omp parallel
+  {
+    if (team_marks) {
+#pragma omp for schedule(static)
+      for (int c = 0; c < kChunks; ++c)
+        mark_expanded(lod, priority * std::size_t(c) / kChunks, priority * std::size_t(c + 1) / kChunks, flags);
+#pragma omp for schedule(static)
+      for (int c = 0; c < kChunks; ++c)
+        mark_children(tree, lod, priority * std::size_t(c) / kChunks, priority * std::size_t(c + 1) / kChunks, flags);
+    }
+#pragma omp for schedule(dynamic, 1)
     for (int c = 0; c < kChunks; ++c) {
       std::vector<Triangle>& part = parts[std::size_t(c)];
       part.clear();
-      for (std::size_t node = n * std::size_t(c) / kChunks, end = n * std::size_t(c + 1) / kChunks; node < end; ++node)
-        if (marks[node] == kCut) emit_node(tree, std::int32_t(node), marks, &part);
+      emit_range(tree, marks, n * std::size_t(c) / kChunks, n * std::size_t(c + 1) / kChunks, &part);
     }
-    std::size_t total = 0;
-    for (const auto& part : parts) total += part.size();
-    triangles->reserve(total);
-    for (const auto& part : parts) triangles->insert(triangles->end(), part.begin(), part.end());
+#pragma omp single
+    {
+      offsets[0] = 0;
+      for (int c = 0; c < kChunks; ++c) offsets[c + 1] = offsets[c] + parts[std::size_t(c)].size();
+      // Not cleared first: what a previous level left is overwritten rather
+      // than zeroed and then overwritten.
+      triangles->resize(offsets[kChunks]);
+      append_patches();
+    }
+    // The join is a copy of the whole level, and the flags are cleared: on
+    // every core too.
+#pragma omp for schedule(static) nowait
+    for (int c = 0; c < kChunks; ++c)
+      std::copy(parts[std::size_t(c)].begin(), parts[std::size_t(c)].end(), triangles->begin() + std::ptrdiff_t(offsets[c]));
+#pragma omp for schedule(static) nowait
+    for (int c = 0; c < kChunks; ++c)
+      std::fill(flags + n * std::size_t(c) / kChunks, flags + n * std::size_t(c + 1) / kChunks, 0);
   }
-  for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
-    bool shown = true;
-    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1] && shown; ++k)
-      shown = flags[tree.patch_needs[k]] & kExpanded;
-    if (shown)
-      triangles->insert(triangles->end(), tree.patch_triangles.begin() + tree.patch_group_first[g],
-                        tree.patch_triangles.begin() + tree.patch_group_first[g + 1]);
-  }
-  std::fill(expanded->begin(), expanded->end(), 0);
 }
 
 TriangleMesh compact_lod(const McOctree& tree, const std::vector<Triangle>& triangles) {

@@ -173,28 +173,30 @@ void transition_slots(const TransitionInput& in, SlotTriangles* result) {
 }
 
 // The lattice points whose signs the triangulation reads: the corners, the
-// midpoints of split edges and the points of fine faces.
+// midpoints of split edges and the points of fine faces; by tables of four
+// edges and of the six faces at a time.
 std::uint32_t used_points(const TransitionInput& in) {
   static const auto masks = [] {
     struct Masks {
       std::uint32_t corners = 0;
-      std::array<std::uint32_t, 12> edge_mid{};
-      std::array<std::uint32_t, 6> face{};
+      std::array<std::array<std::uint32_t, 16>, 3> edge_mids{};
+      std::array<std::uint32_t, 64> faces{};
     } m;
     const Tables& T = tables();
     for (int c = 0; c < 8; ++c) m.corners |= 1u << lattice_of_corner(c);
-    for (int e = 0; e < 12; ++e)
-      m.edge_mid[e] = 1u << ((lattice_of_corner(edge_corner(e, 0)) + lattice_of_corner(edge_corner(e, 1))) / 2);
+    for (int e = 0; e < 12; ++e) {
+      const std::uint32_t mid = 1u << ((lattice_of_corner(edge_corner(e, 0)) + lattice_of_corner(edge_corner(e, 1))) / 2);
+      for (int bits = 0; bits < 16; ++bits)
+        if ((bits >> (e % 4)) & 1) m.edge_mids[std::size_t(e / 4)][std::size_t(bits)] |= mid;
+    }
     for (int f = 0; f < 6; ++f)
-      for (int p : T.face_points[f]) m.face[f] |= 1u << p;
+      for (int bits = 0; bits < 64; ++bits)
+        if ((bits >> f) & 1)
+          for (int p : T.face_points[f]) m.faces[std::size_t(bits)] |= 1u << p;
     return m;
   }();
-  std::uint32_t used = masks.corners;
-  for (int e = 0; e < 12; ++e)
-    if ((in.split_edges >> e) & 1) used |= masks.edge_mid[e];
-  for (int f = 0; f < 6; ++f)
-    if ((in.fine_faces >> f) & 1) used |= masks.face[f];
-  return used;
+  return masks.corners | masks.edge_mids[0][in.split_edges & 15] | masks.edge_mids[1][(in.split_edges >> 4) & 15] |
+         masks.edge_mids[2][(in.split_edges >> 8) & 15] | masks.faces[in.fine_faces & 63];
 }
 
 // Configurations repeat (a flat stretch of surface gives the same signs node
@@ -202,15 +204,20 @@ std::uint32_t used_points(const TransitionInput& in) {
 // and the slot triples, 1 + 3 x count bytes, which the emit loop reads in one
 // or two cache lines (a fixed 200-byte entry per hash slot was slower at every
 // level than this, though it missed no more often).
+struct Memo {
+  FlatHashMap offsets{1 << 14};
+  std::vector<std::uint8_t> packed;
+};
+thread_local Memo memo;
+
+std::uint64_t memo_key(const TransitionInput& in) {
+  return std::uint64_t(in.inside & used_points(in)) | std::uint64_t(in.fine_faces & 63) << 27 |
+         std::uint64_t(in.split_edges & 4095) << 33;
+}
+
 const std::uint8_t* cached_slots(const TransitionInput& in) {
-  struct Memo {
-    FlatHashMap offsets{1 << 14};
-    std::vector<std::uint8_t> packed;
-  };
-  thread_local Memo memo;
   constexpr std::size_t kMaxPacked = std::size_t(16) << 20;  // start over beyond this
-  const std::uint64_t key = std::uint64_t(in.inside & used_points(in)) | std::uint64_t(in.fine_faces & 63) << 27 |
-                            std::uint64_t(in.split_edges & 4095) << 33;
+  const std::uint64_t key = memo_key(in);
   std::int32_t at = memo.offsets.find(key);
   if (at < 0) {
     if (memo.packed.size() > kMaxPacked) memo = Memo{};
@@ -226,6 +233,14 @@ const std::uint8_t* cached_slots(const TransitionInput& in) {
 
 }  // namespace
 
+void prefetch_transition(const TransitionInput& in) {
+  memo.offsets.prefetch(memo_key(in));
+  const char* sub = reinterpret_cast<const char*>(in.sub_edge_vertices);
+  for (int at = 0; at < kSubEdges * 4 + 64; at += 64) __builtin_prefetch(sub + at);
+  __builtin_prefetch(in.edge_vertices);
+  __builtin_prefetch(in.edge_vertices + 11);
+}
+
 int transition_triangle_count(const TransitionInput& in) { return cached_slots(in)[0]; }
 
 void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out) {
@@ -233,7 +248,8 @@ void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* ou
   const int count = entry[0];
   const std::uint8_t* slots = entry + 1;
   // Slot -> vertex as one table: choosing among three arrays per corner
-  // mispredicted often enough to cost more than the copy.
+  // mispredicted often enough to cost more than the copy (and gathering only
+  // the slots an entry uses was slower still).
   std::int32_t vertex[kCentreSlot + 1];
   std::copy_n(in.sub_edge_vertices, kSubEdges, vertex);
   std::copy_n(in.edge_vertices, 12, vertex + kSubEdges);
