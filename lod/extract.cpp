@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstring>
 
 namespace scan2lod {
 namespace {
@@ -33,6 +34,7 @@ const auto kSplits = [] {
 
 // Marks in extract_lod's scratch: bit 0 expanded, bit 1 in the cut.
 constexpr std::uint8_t kExpanded = 1, kCut = 2;
+constexpr std::uint64_t kCutInEight = 0x0202020202020202ull;  // kCut in each of eight flags
 
 // Levels from this many expansions on are emitted by all cores.
 constexpr std::size_t kParallelFrom = 1024;
@@ -97,7 +99,26 @@ void emit_range(const McOctree& tree, const std::vector<std::uint8_t>& marks, st
     return queue[tail++ % kAhead];
   };
   bool in_run = false;  // the newest pending entry is a run still growing
+  // Nodes above the leaves read their neighbours, a miss each unless asked
+  // for ahead.
+  const std::size_t internal = std::min(end, tree.internal_nodes());
+  constexpr std::size_t kNeighboursAhead = 8;
   for (std::size_t node = begin; node < end; ++node) {
+    // Eight flags at a time where none is in the cut: small levels are
+    // mostly such runs, and the scan was most of their time.
+    if ((node & 7) == 0 && node + 8 <= end) {
+      std::uint64_t eight;
+      std::memcpy(&eight, marks.data() + node, 8);
+      if (!(eight & kCutInEight)) {
+        node += 7;
+        continue;
+      }
+    }
+    if (node + kNeighboursAhead < internal) {
+      const auto* ahead = tree.neighbours[node + kNeighboursAhead].data();
+      __builtin_prefetch(ahead);
+      __builtin_prefetch(ahead + 26);
+    }
     if (marks[node] != kCut) continue;
     TransitionInput in;
     if (transition_of(tree, std::int32_t(node), marks, &in)) {

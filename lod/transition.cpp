@@ -4,6 +4,7 @@
 #include "reconstruct/cube_table.h"
 
 #include <algorithm>
+#include <cstring>
 
 namespace scan2lod {
 namespace {
@@ -250,14 +251,13 @@ void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* ou
   // Slot -> vertex as one table: choosing among three arrays per corner
   // mispredicted often enough to cost more than the copy (and gathering only
   // the slots an entry uses was slower still).
+  // Fixed-size copies, which the compiler inlines: std::copy_n went through
+  // memmove, which cost more than the rest of this function.
   std::int32_t vertex[kCentreSlot + 1];
-  std::copy_n(in.sub_edge_vertices, kSubEdges, vertex);
-  std::copy_n(in.edge_vertices, 12, vertex + kSubEdges);
+  std::memcpy(vertex, in.sub_edge_vertices, sizeof(std::int32_t) * kSubEdges);
+  std::memcpy(vertex + kSubEdges, in.edge_vertices, sizeof(std::int32_t) * 12);
   vertex[kCentreSlot] = in.centre;
-  const std::size_t first = out->size();
-  out->resize(first + std::size_t(count));
-  Triangle* emitted = out->data() + first;
-  for (int i = 0; i < count; ++i, slots += 3) emitted[i] = {vertex[slots[0]], vertex[slots[1]], vertex[slots[2]]};
+  for (int i = 0; i < count; ++i, slots += 3) out->push_back({vertex[slots[0]], vertex[slots[1]], vertex[slots[2]]});
 }
 
 }  // namespace scan2lod
