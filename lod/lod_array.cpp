@@ -2,6 +2,7 @@
 
 #include "core/mesh_edges.h"
 #include "lod/extract.h"
+#include "reconstruct/cube_table.h"
 
 #include <algorithm>
 #include <cmath>
@@ -46,7 +47,32 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
       for (std::int32_t e : edges.of_triangle[std::size_t(first_of_leaf[node] + t)])
         if (edges.uses[std::size_t(e)] == 1) pin(tree.parents[node]);  // on the rim
   }
+  // A leaf whose clean-up dropped some of its triangles (a speck or fin beside
+  // kept surface) still has the signs that made them; a coarse node over it,
+  // or a transition beside it, would join those crossings into surface whose
+  // edges no full-mesh triangle has: a new boundary.
+  const auto& cases = cube_cases();
+  for (std::size_t node = 0; node < n; ++node)
+    if (tree.is_leaf(node) && tree.parents[node] >= 0 &&
+        tree.triangle_counts[node] < cases[tree.cases[node]].triangle_count)
+      pin(tree.parents[node]);
   for (std::int32_t node : tree.patch_needs) pin(node);
+  // Every node with a patch's vertex among its crossings, not only the
+  // parents of the leaves that hold the patch's rim edges: a coarse node there
+  // can close the patch's loop with a triangle of its own (an edge of three
+  // triangles on a Mobius strip).
+  std::vector<std::uint8_t> on_patch(tree.positions.size(), 0);
+  for (const Triangle& t : tree.patch_triangles)
+    for (const std::int32_t v : t) on_patch[std::size_t(v)] = 1;
+  auto touches_patch = [&](std::size_t node) {
+    bool touches = false;
+    for (const std::int32_t v : tree.edge_vertices[node]) touches = touches || (v >= 0 && on_patch[std::size_t(v)]);
+    for (const std::int32_t v : tree.sub_edge_vertices[node]) touches = touches || (v >= 0 && on_patch[std::size_t(v)]);
+    return touches;
+  };
+  if (!tree.patch_triangles.empty())
+    for (std::size_t node = 0; node < tree.internal_nodes(); ++node)
+      if (touches_patch(node)) pin(std::int32_t(node));
   // A crossing the leaves have no vertex for (mc_octree.cpp adds one) marks a
   // coarse node whose signs see surface the leaves do not have.
   std::int32_t first_centre = std::int32_t(tree.positions.size());

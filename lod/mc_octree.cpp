@@ -328,8 +328,18 @@ void fit_centres(const std::vector<LeafSums>& sums, McOctree* tree) {
     for (int k = 0; k < 3; ++k)
       if (values[k] > 0.1 * values[2] && values[k] > 0.0)
         step += solver.eigenvectors().col(k) * (solver.eigenvectors().col(k).dot(residual) / values[k]);
-    const double limit = 0.5 * node_size(*tree, node);
+    const double size = node_size(*tree, node), limit = 0.5 * size;
     if (step.norm() > limit) step *= limit / step.norm();
+    // Where the planes meet at one of the node's own crossings (a corner of
+    // the surface), the fan's two triangles there would have no area: the
+    // step is halved until the centre keeps clear of every crossing.
+    auto clear_of_crossings = [&](const Eigen::Vector3d& x) {
+      const Vec3f p = (x + origin).cast<float>();
+      auto clear = [&](std::int32_t c) { return c < 0 || (tree->positions[std::size_t(c)] - p).norm() > 1e-3 * size; };
+      return std::all_of(tree->edge_vertices[node].begin(), tree->edge_vertices[node].end(), clear) &&
+             std::all_of(tree->sub_edge_vertices[node].begin(), tree->sub_edge_vertices[node].end(), clear);
+    };
+    for (int tries = 0; tries < 4 && !clear_of_crossings(x0 + step); ++tries) step *= 0.5;
     tree->positions[v] = (x0 + step + origin).cast<float>();
   }
 }

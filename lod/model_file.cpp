@@ -267,6 +267,9 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
     fail("written by a newer scan2lod (format " + std::to_string(major) + "." + std::to_string(minor) +
          ", this reads up to " + std::to_string(kModelFormatMajor) + ")");
   if (major == 0) fail("format version 0 was never written by scan2lod");
+  if (major < kModelFormatMajor)
+    fail("written by an older scan2lod (format " + std::to_string(major) + "." + std::to_string(minor) +
+         "), whose crack patching triangulated differently from this one's; rebuild the model with scan2lod build");
   const std::string format = "format " + std::to_string(major) + "." + std::to_string(minor);
   const std::uint64_t section_count = get_u32(data + 16);
   const std::uint64_t file_length = get_u64(data + 24);

@@ -42,6 +42,10 @@
 // Added in 1.1, optional (a 1.0 reader skips it and may offer levels inside the
 // pinned prefix; a 1.1 reader of a 1.0 file takes 0):
 //   PINC u64, one                          LodArray::pinned
+// Format 2.0 has 1.1's sections; what changed is how extraction triangulates a
+// transition with several loops (one loop around the centre, lod/transition.h),
+// so a 1.x file's accumulation table no longer counts what extraction emits
+// and a reader rejects it.
 // A new array is a new tag (in encode_model, the known list, decode_model's
 // reads and its checks). When older readers can still draw the model without
 // it, the writer marks it optional and bumps the minor version; otherwise it is
@@ -63,8 +67,8 @@ struct LodModel {
   LodArray lod;
 };
 
-constexpr std::uint32_t kModelFormatMajor = 1;
-constexpr std::uint32_t kModelFormatMinor = 1;
+constexpr std::uint32_t kModelFormatMajor = 2;
+constexpr std::uint32_t kModelFormatMinor = 0;
 
 // Writes `model` to `path` (extension .mco) through a temporary file renamed
 // into place (write_atomically): a failure leaves nothing under `path`.

@@ -155,21 +155,37 @@ void transition_slots(const TransitionInput& in, SlotTriangles* result) {
     t[0] = std::uint8_t(a), t[1] = std::uint8_t(b), t[2] = std::uint8_t(c);
   };
   bool seen[60] = {};
-  int loop[60];
+  int loops[60];  // the loops' slots, one after another
+  int loop_first[31] = {0}, loop_count = 0;
   for (int start = 0; start < 60; ++start) {
     if (next[start] < 0 || seen[start]) continue;
-    int m = 0;
-    for (int s = start; s >= 0 && !seen[s]; s = next[s]) seen[s] = true, loop[m++] = s;
+    int end = loop_first[loop_count];
+    for (int s = start; s >= 0 && !seen[s]; s = next[s]) seen[s] = true, loops[end++] = s;
+    loop_first[++loop_count] = end;
+  }
+  // The centre was fitted to the node's surface, one sheet: it goes to the
+  // longest loop. Others (a second sheet through the node, or a small loop
+  // around a refined midpoint) are fanned from a crossing of their own, so no
+  // two sheets meet at the centre (a pinched vertex) and no fan reaches over
+  // from a centre placed for another sheet (a fold).
+  int centred = -1;
+  for (int l = 0; l < loop_count; ++l)
+    if (loop_first[l + 1] - loop_first[l] > 3 &&
+        (centred < 0 || loop_first[l + 1] - loop_first[l] > loop_first[centred + 1] - loop_first[centred]))
+      centred = l;
+  for (int l = 0; l < loop_count; ++l) {
+    const int* loop = loops + loop_first[l];
+    const int m = loop_first[l + 1] - loop_first[l];
     // Two segments between the same two crossings (a single inside midpoint
     // pinched off on a split edge) enclose nothing: the two neighbours beyond
     // those faces already share that edge.
     if (m == 2) continue;
     // Loops run clockwise around the outward normal (as in cube_table.cpp): emit reversed.
-    if (m == 3) {
-      add(loop[0], loop[2], loop[1]);
-      continue;
+    if (l == centred) {
+      for (int k = 0; k < m; ++k) add(kCentreSlot, loop[(k + 1) % m], loop[k]);
+    } else {
+      for (int k = 1; k + 1 < m; ++k) add(loop[0], loop[k + 1], loop[k]);
     }
-    for (int k = 0; k < m; ++k) add(kCentreSlot, loop[(k + 1) % m], loop[k]);
   }
 }
 

@@ -7,8 +7,9 @@
 // polygon joins its crossings by the same rule as the case table (each run of
 // inside corners is cut off by one segment), which depends on the polygon's
 // signs alone; both nodes on a face build the same polygon, so they join the
-// same crossings and the mesh stays closed and conforming. The loops that the
-// segments form are fanned around the node's centre vertex.
+// same crossings and the mesh stays closed and conforming. The longest loop
+// that the segments form is fanned around the node's centre vertex, any other
+// from one of its own crossings (two sheets never share the centre).
 //
 // Local lattice: the node's 3x3x3 points (i, j, k) in {0,1,2}^3, index
 // i + 3j + 9k; 1 is a midpoint. The 48 boundary sub-edges join neighbouring
@@ -46,7 +47,7 @@ struct TransitionInput {
   std::uint32_t inside;                          // bit p: lattice point p is inside
   const std::int32_t* edge_vertices;             // the node's 12 whole-edge vertices
   const std::int32_t* sub_edge_vertices;         // 48, in transition_sub_edges() order
-  std::int32_t centre;                           // vertex the loops are fanned around
+  std::int32_t centre;                           // vertex the longest loop is fanned around
   std::uint8_t fine_faces;                       // bit axis*2+side: finer node across
   std::uint16_t split_edges;                     // bit e: finer node around edge e
 };

@@ -421,17 +421,19 @@ TEST(ModelFile, WritesOnlyModelsIntoFoldersThatExist) {
   }
 }
 
-TEST(ModelFile, Format10FilesWithoutThePinnedCountStillLoad) {
-  // Format 1.0 had no 'PINC': such a file loads with nothing pinned, so every
-  // record of the accumulation table is offered again.
-  std::vector<RawSection> sections = split(bunny64_bytes());
-  const auto pinc = std::find_if(sections.begin(), sections.end(), [](const RawSection& s) { return s.tag == tag("PINC"); });
-  ASSERT_NE(pinc, sections.end());
-  EXPECT_EQ(pinc->flags, 0u);  // optional: a 1.0 reader skips it
-  sections.erase(pinc);
-  const std::vector<std::uint8_t> old = join(sections, 1, 0);
-  const LodModel l = decode_model(old.data(), old.size(), "old.mco");
-  EXPECT_EQ(l.lod.pinned, 0u);
-  EXPECT_EQ(l.lod.order, bunny64().lod.order);
-  EXPECT_LT(monotone_priorities(l.lod)[1], bunny64().lod.pinned);
+TEST(ModelFile, Format1FilesAreRejectedWithARebuildHint) {
+  // 1.x transitions fanned every loop around the centre: their accumulation
+  // tables do not count what this extraction emits.
+  for (const std::uint32_t minor : {0u, 1u}) {
+    const std::vector<std::uint8_t> old = join(split(bunny64_bytes()), 1, minor);
+    try {
+      decode_model(old.data(), old.size(), "old.mco");
+      ADD_FAILURE() << "a format 1." << minor << " file loaded";
+    } catch (const InputError& e) {
+      const std::string error = e.what();
+      EXPECT_NE(error.find("old.mco"), std::string::npos) << error;
+      EXPECT_NE(error.find("format 1." + std::to_string(minor)), std::string::npos) << error;
+      EXPECT_NE(error.find("rebuild the model"), std::string::npos) << error;
+    }
+  }
 }
