@@ -76,22 +76,26 @@ bool transition_of(const McOctree& tree, std::int32_t node, const std::vector<st
 //   time at 100 %.
 // - A transition's cached triangulation is a cache miss away; it is asked for
 //   a few nodes ahead and emitted when its turn comes, in node order.
+// With `blocks`, also appends each node and its triangle count there.
 void emit_range(const McOctree& tree, const std::vector<std::uint8_t>& marks, std::size_t begin, std::size_t end,
-                std::vector<Triangle>* triangles) {
+                std::vector<Triangle>* triangles, std::vector<CutBlock>* blocks = nullptr) {
   const Triangle* own = tree.triangles.data();
   struct Pending {
     TransitionInput in;           // when run_end < 0
     std::int32_t run_begin = 0;   // else own triangles [run_begin, run_end)
     std::int32_t run_end = 0;
+    std::size_t block = 0;        // a transition's entry in blocks
   };
   constexpr unsigned kAhead = 8;  // a power of two
   Pending queue[kAhead];
   unsigned head = 0, tail = 0;  // pending: [head, tail), modulo kAhead
   auto emit_front = [&] {
     const Pending& p = queue[head++ % kAhead];
-    if (p.run_end < 0)
+    if (p.run_end < 0) {
+      const std::size_t before = triangles->size();
       triangulate_transition(p.in, triangles);
-    else
+      if (blocks) (*blocks)[p.block].count = std::int32_t(triangles->size() - before);
+    } else
       triangles->insert(triangles->end(), own + p.run_begin, own + p.run_end);
   };
   auto push = [&]() -> Pending& {
@@ -127,9 +131,14 @@ void emit_range(const McOctree& tree, const std::vector<std::uint8_t>& marks, st
       p.in = in;
       p.run_end = -1;
       in_run = false;
+      if (blocks) {
+        p.block = blocks->size();
+        blocks->push_back({std::int32_t(node), 0});
+      }
       continue;
     }
     const std::int32_t first = tree.first_triangle[node];
+    if (blocks) blocks->push_back({std::int32_t(node), tree.triangle_counts[node]});
     Pending* last = in_run ? &queue[(tail - 1) % kAhead] : nullptr;
     if (!last || last->run_end != first) {
       last = &push();
@@ -142,6 +151,11 @@ void emit_range(const McOctree& tree, const std::vector<std::uint8_t>& marks, st
 }
 
 }  // namespace
+
+void emit_cut(const McOctree& tree, const std::vector<std::uint8_t>& flags, std::vector<Triangle>* triangles,
+              std::vector<CutBlock>* blocks) {
+  emit_range(tree, flags, 0, tree.size(), triangles, blocks);
+}
 
 void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
                std::vector<Triangle>* triangles) {

@@ -21,6 +21,18 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
 // them (the root alone at priority 0).
 void mark_cut(const McOctree& tree, const LodArray& lod, std::size_t priority, std::uint8_t* flags);
 
+// A node of the cut and how many triangles it emitted.
+struct CutBlock {
+  std::int32_t node;
+  std::int32_t count;
+};
+
+// Appends the triangles of the nodes flagged 2 in `flags` (mark_cut's cut),
+// in node order, as extract_lod does on one thread, and to `blocks` each of
+// those nodes with its count (LodCursor's blocks).
+void emit_cut(const McOctree& tree, const std::vector<std::uint8_t>& flags, std::vector<Triangle>* triangles,
+              std::vector<CutBlock>* blocks);
+
 // Appends the triangles of one node of the cut, given which nodes are expanded
 // (bit 0 of their flag):
 // its own, or, beside expanded cells, its transition triangulation.

@@ -66,7 +66,12 @@ void LodCursor::move_to(std::size_t priority) {
   while (priority_ < priority) expand(lod_->order[priority_++]);
   while (priority_ > priority) collapse(lod_->order[--priority_]);
   // Only now are all flags final, which the transitions of the nodes read.
-  for (const std::int32_t node : dirty_) {
+  // The dirty nodes lie all over the tree: what each reads is asked for a few
+  // nodes ahead.
+  constexpr std::size_t kAhead = 8;
+  for (std::size_t i = 0; i < dirty_.size(); ++i) {
+    if (i + kAhead < dirty_.size()) prefetch(dirty_[i + kAhead]);
+    const std::int32_t node = dirty_[i];
     flags_[std::size_t(node)] &= std::uint8_t(~kDirty);
     if (in_cut(node))
       emit(node);
@@ -101,21 +106,20 @@ void LodCursor::rebuild(std::size_t priority) {
   std::fill(flags_.begin(), flags_.end(), 0);
   mark_cut(tree, *lod_, priority, flags_.data());
   priority_ = priority;
-  for (std::size_t node = 0; node < tree.size(); ++node) {
-    if (flags_[node] != kDirty) continue;
-    flags_[node] = 0;
-    const std::size_t first = buffer_.size();
-    emit_node(tree, std::int32_t(node), flags_, &buffer_);
-    block_first_[node] = first;
-    block_count_[node] = std::int32_t(buffer_.size() - first);
-    dirty_.push_back(std::int32_t(node));  // the cut, this once
-  }
+  cut_.clear();
+  emit_cut(tree, flags_, &buffer_, &cut_);
   slot_owner_.assign(buffer_.size(), kInside);  // one fill rather than one per block
-  for (const std::int32_t node : dirty_)
-    if (block_count_[std::size_t(node)]) slot_owner_[block_first_[std::size_t(node)]] = node;
-  cut_nodes_ = dirty_.size();
+  std::size_t first = 0;
+  for (const CutBlock& b : cut_) {
+    const std::size_t node = std::size_t(b.node);
+    flags_[node] = 0;
+    block_first_[node] = first;
+    block_count_[node] = b.count;
+    if (b.count) slot_owner_[first] = b.node;
+    first += std::size_t(b.count);
+  }
+  cut_nodes_ = cut_.size();
   emitted_last_move_ += cut_nodes_;
-  dirty_.clear();
   for (std::size_t g = 0; g < needs_left_.size(); ++g) {
     std::int32_t left = 0;
     for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
@@ -143,6 +147,25 @@ void LodCursor::collapse(std::int32_t node) {
     const std::size_t g = std::size_t(need_groups_[std::size_t(k)]);
     if (needs_left_[g]++ == 0) remove(std::int32_t(tree_->size() + g));
   }
+}
+
+void LodCursor::prefetch(std::int32_t node) const {
+  const McOctree& tree = *tree_;
+  const std::size_t n = std::size_t(node);
+  __builtin_prefetch(&tree.parents[n]);
+  __builtin_prefetch(&block_count_[n]);
+  __builtin_prefetch(&block_first_[n]);
+  __builtin_prefetch(&tree.first_triangle[n]);
+  if (n >= tree.internal_nodes()) return;
+  const char* around = reinterpret_cast<const char*>(tree.neighbours[n].data());
+  __builtin_prefetch(around);
+  __builtin_prefetch(around + 104);
+  const char* sub = reinterpret_cast<const char*>(tree.sub_edge_vertices[n].data());
+  for (int at = 0; at < kSubEdges * 4 + 64; at += 64) __builtin_prefetch(sub + at);
+  __builtin_prefetch(tree.edge_vertices[n].data());
+  __builtin_prefetch(tree.edge_vertices[n].data() + 11);
+  __builtin_prefetch(&tree.boundary_inside[n]);
+  __builtin_prefetch(&tree.centre_vertices[n]);
 }
 
 void LodCursor::mark(std::int32_t node) {

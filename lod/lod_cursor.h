@@ -11,6 +11,7 @@
 #pragma once
 
 #include "core/types.h"
+#include "lod/extract.h"
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
 
@@ -57,6 +58,7 @@ class LodCursor {
   void rebuild(std::size_t priority);
   void expand(std::int32_t node);
   void collapse(std::int32_t node);
+  void prefetch(std::int32_t node) const;  // what emit or remove will read
   void mark(std::int32_t node);
   void mark_around(std::int32_t node);
   bool in_cut(std::int32_t node) const;
@@ -83,6 +85,7 @@ class LodCursor {
   // of a block, kHole in a hole (lod_cursor.cpp).
   std::vector<std::int32_t> slot_owner_;
   std::vector<Triangle> emitted_;  // one node's new triangles, before they go in
+  std::vector<CutBlock> cut_;      // rebuild's nodes and counts
   std::size_t holes_ = 0;
 
   // Patch groups: needs not yet expanded (a group shows at 0), and per node
