@@ -18,6 +18,7 @@ struct Tables {
   std::array<std::array<std::uint8_t, 9>, 6> face_points{};   // (u, v) grid on each face, index u + 3v
   std::array<bool, 6> face_reversed{};                        // side 0 faces wind the other way
   std::array<std::array<std::int8_t, 4>, 6> face_edges{};     // node edges around each face, CCW from (0,0)
+  std::array<std::int8_t, 61> slot_line{};  // the node edge whose line holds a slot's crossing, or -1
 
   Tables() {
     for (auto& row : sub_edge_of) row.fill(-1);
@@ -65,6 +66,25 @@ struct Tables {
           face_edges[f][k] = edge_of[face_points[f][c0[0] + 3 * c0[1]]][face_points[f][c1[0] + 3 * c1[1]]];
         }
       }
+    // A sub-edge lies on a node edge's line when its other two coordinates
+    // are both 0 or 2.
+    slot_line.fill(-1);
+    for (int k = 0; k < kSubEdges; ++k) {
+      const int a = sub_edges[std::size_t(k)].a, b = sub_edges[std::size_t(k)].b;
+      int pa[3] = {a % 3, a / 3 % 3, a / 9};
+      const int pb[3] = {b % 3, b / 3 % 3, b / 9};
+      int along = 0;
+      while (pa[along] == pb[along]) ++along;
+      bool on_line = true;
+      for (int axis = 0; axis < 3; ++axis)
+        if (axis != along && pa[axis] == 1) on_line = false;
+      if (!on_line) continue;
+      int lo[3] = {pa[0], pa[1], pa[2]}, hi[3] = {pa[0], pa[1], pa[2]};
+      lo[along] = 0;
+      hi[along] = 2;
+      slot_line[std::size_t(k)] = edge_of[lattice(lo[0], lo[1], lo[2])][lattice(hi[0], hi[1], hi[2])];
+    }
+    for (int e = 0; e < 12; ++e) slot_line[std::size_t(kSubEdges + e)] = std::int8_t(e);
   }
 };
 
@@ -167,12 +187,25 @@ void transition_slots(const TransitionInput& in, SlotTriangles* result) {
   // longest loop. Others (a second sheet through the node, or a small loop
   // around a refined midpoint) are fanned from a crossing of their own, so no
   // two sheets meet at the centre (a pinched vertex) and no fan reaches over
-  // from a centre placed for another sheet (a fold).
+  // from a centre placed for another sheet (a fold). That crossing must not
+  // share a node edge's line with another crossing of the loop: a diagonal
+  // along a node edge is a segment of the nodes around that edge (an edge of
+  // three or four triangles). Without such a crossing the loop takes the
+  // centre too.
   int centred = -1;
   for (int l = 0; l < loop_count; ++l)
     if (loop_first[l + 1] - loop_first[l] > 3 &&
         (centred < 0 || loop_first[l + 1] - loop_first[l] > loop_first[centred + 1] - loop_first[centred]))
       centred = l;
+  auto apex_of = [&](const int* loop, int m) {
+    for (int k = 0; k < m; ++k) {
+      bool clear = true;
+      const int line = T.slot_line[std::size_t(loop[k])];
+      for (int j = 2; j + 1 < m && clear && line >= 0; ++j) clear = T.slot_line[std::size_t(loop[(k + j) % m])] != line;
+      if (clear) return k;
+    }
+    return -1;
+  };
   for (int l = 0; l < loop_count; ++l) {
     const int* loop = loops + loop_first[l];
     const int m = loop_first[l + 1] - loop_first[l];
@@ -181,10 +214,11 @@ void transition_slots(const TransitionInput& in, SlotTriangles* result) {
     // those faces already share that edge.
     if (m == 2) continue;
     // Loops run clockwise around the outward normal (as in cube_table.cpp): emit reversed.
-    if (l == centred) {
+    const int apex = l == centred ? -1 : apex_of(loop, m);
+    if (apex < 0) {
       for (int k = 0; k < m; ++k) add(kCentreSlot, loop[(k + 1) % m], loop[k]);
     } else {
-      for (int k = 1; k + 1 < m; ++k) add(loop[0], loop[k + 1], loop[k]);
+      for (int k = 1; k + 1 < m; ++k) add(loop[apex], loop[(apex + k + 1) % m], loop[(apex + k) % m]);
     }
   }
 }
