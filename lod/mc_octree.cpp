@@ -344,6 +344,122 @@ void fit_centres(const std::vector<LeafSums>& sums, McOctree* tree) {
   }
 }
 
+// Moves centres whose transition fans would fold. A fan triangle whose side
+// on the loop runs against the loop (seen from the centre) faces the wrong
+// way: at R = 64 such triangles made every fold of the bunny's levels with
+// normals more than 150 degrees apart. The loops depend on which neighbours
+// are finer, so each node is tried on representative configurations (each
+// face fine alone, each edge split alone, every face fine); a centre that
+// flips fewer fan triangles there replaces the fitted one: the nearest point
+// where every fan triangle faces its loop's way (cyclic projections onto those
+// half-spaces), else points towards the mean of the node's crossings or a
+// loop's mean. Extraction still only reads the centre's index.
+void unfold_centres(McOctree* tree) {
+  std::array<std::uint16_t, 6> face_edges{};  // node edges on face axis * 2 + side
+  for (int e = 0; e < 12; ++e) {
+    const int c = edge_corner(e, 0);
+    for (int axis = 0; axis < 3; ++axis)
+      if (axis != e / 4) face_edges[std::size_t(axis * 2 + ((c >> axis) & 1))] |= std::uint16_t(1u << e);
+  }
+  std::vector<std::pair<std::uint8_t, std::uint16_t>> configurations;
+  for (int f = 0; f < 6; ++f) configurations.push_back({std::uint8_t(1u << f), face_edges[std::size_t(f)]});
+  for (int e = 0; e < 12; ++e) configurations.push_back({0, std::uint16_t(1u << e)});
+  configurations.push_back({63, 4095});
+
+  struct Side {
+    Eigen::Vector3d a, b;  // a loop segment, in loop order
+    int loop;
+  };
+  const std::int64_t internal = std::int64_t(tree->internal_nodes());
+  // Each node moves only its own centre, which no other node's loops hold.
+#pragma omp parallel
+  {
+    std::vector<Side> sides;
+    std::vector<Eigen::Vector3d> loop_normals, loop_means;
+    std::vector<Triangle> fans;
+    std::vector<std::pair<std::int32_t, std::int32_t>> links;  // loop[k + 1] -> loop[k]
+    std::vector<std::uint8_t> used;
+#pragma omp for schedule(dynamic, 256)
+    for (std::int64_t node_index = 0; node_index < internal; ++node_index) {
+      const std::size_t node = std::size_t(node_index);
+      const std::int32_t centre = tree->centre_vertices[node];
+      if (centre < 0) continue;
+      sides.clear();
+      loop_normals.clear();
+      loop_means.clear();
+      for (const auto& [faces, edges] : configurations) {
+        fans.clear();
+        triangulate_transition({tree->boundary_inside[node], tree->edge_vertices[node].data(),
+                                tree->sub_edge_vertices[node].data(), centre, faces, edges},
+                               &fans);
+        // Fan triangles are (centre, loop[k + 1], loop[k]): chain them into loops.
+        links.clear();
+        for (const Triangle& t : fans)
+          if (t[0] == centre) links.push_back({t[1], t[2]});
+        std::sort(links.begin(), links.end());
+        used.assign(links.size(), 0);
+        for (std::size_t first = 0; first < links.size(); ++first) {
+          if (used[first]) continue;
+          const int loop = int(loop_normals.size());
+          Eigen::Vector3d normal = Eigen::Vector3d::Zero(), mean = Eigen::Vector3d::Zero();
+          int m = 0;
+          for (std::size_t k = first; k < links.size() && !used[k];) {
+            used[k] = 1;
+            const Eigen::Vector3d a = tree->positions[links[k].first].cast<double>(),
+                                  b = tree->positions[links[k].second].cast<double>();
+            normal += a.cross(b);  // the loop's vector area, whatever the centre
+            mean += a;
+            ++m;
+            sides.push_back({a, b, loop});
+            const auto at = std::lower_bound(links.begin(), links.end(), std::make_pair(links[k].second, std::int32_t(-1)));
+            k = at != links.end() && at->first == links[k].second ? std::size_t(at - links.begin()) : links.size();
+          }
+          loop_normals.push_back(normal.normalized());
+          loop_means.push_back(mean / m);
+        }
+      }
+      if (sides.empty()) continue;
+      auto flips = [&](const Eigen::Vector3d& c) {
+        int count = 0;
+        for (const Side& s : sides) count += (s.a - c).cross(s.b - c).dot(loop_normals[std::size_t(s.loop)]) < 0.0;
+        return count;
+      };
+      const Eigen::Vector3d fitted = tree->positions[centre].cast<double>();
+      int best = flips(fitted);
+      if (best == 0) continue;
+      const double size = node_size(*tree, node);
+      std::vector<Eigen::Vector3d> candidates;
+      Eigen::Vector3d c = fitted;
+      for (int round = 0; round < 100; ++round) {
+        bool moved = false;
+        for (const Side& s : sides) {
+          // Side a -> b faces its loop's way from c when g . c + h > 0.
+          const Eigen::Vector3d& n = loop_normals[std::size_t(s.loop)];
+          const Eigen::Vector3d g = (s.a - s.b).cross(n);
+          const double h = s.a.cross(s.b).dot(n), margin = 1e-3 * size * (s.a - s.b).norm(), value = g.dot(c) + h;
+          if (value < margin && g.squaredNorm() > 0.0) c += (margin - value) / g.squaredNorm() * g, moved = true;
+        }
+        if (!moved) break;
+      }
+      candidates.push_back(c);
+      Eigen::Vector3d own = Eigen::Vector3d::Zero();
+      int count = 0;
+      for (std::int32_t v : tree->edge_vertices[node])
+        if (v >= 0) own += tree->positions[v].cast<double>(), ++count;
+      if (count == 0)
+        for (std::int32_t v : tree->sub_edge_vertices[node])
+          if (v >= 0) own += tree->positions[v].cast<double>(), ++count;
+      own /= double(std::max(1, count));
+      for (double t : {0.25, 0.5, 0.75, 1.0}) candidates.push_back(fitted + t * (own - fitted));
+      candidates.insert(candidates.end(), loop_means.begin(), loop_means.end());
+      for (const Eigen::Vector3d& candidate : candidates) {
+        const int f = flips(candidate);
+        if (f < best) best = f, tree->positions[centre] = candidate.cast<float>();
+      }
+    }
+  }
+}
+
 // Groups the hole patches by hole (triangles joined by shared edges) and gives
 // each group the parents of the leaves along its rim.
 void group_patches(const std::vector<Triangle>& patches, McOctree* tree) {
@@ -877,6 +993,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
     }
   }
   fit_centres(sums, &tree);
+  unfold_centres(&tree);
   return tree;
 }
 

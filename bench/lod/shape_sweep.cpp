@@ -1,0 +1,548 @@
+// Robustness sweep of the LOD model: is every level crack-free, on shapes and
+// scans other than the one bunny the other benchmarks use?
+//
+// One case per run: the points of a case (virtual scans of an Open3D shape or
+// of a mesh, real range scans, or a mesh's own vertices) are built into a
+// model as `scan2lod build` does (bench/model_build.h), and the levels at 1,
+// 5, 10, 20, 30, ..., 100 % (priority_for_percent, the viewer's slider) are
+// extracted and measured. A case passes when, at every level:
+//   loops     boundary loops <= the full mesh's (a new loop is a crack)
+//   nm        0 non-manifold edges
+//   degen     0 degenerate triangles
+//   accum     the accumulation table's count == the extracted count; also at
+//             40 sampled offered and 20 sampled arbitrary priorities
+//   monotone  counts never fall, over the percent levels and over all
+//             offered priorities (monotone_priorities)
+//   closed    only for shapes with a known answer (--expect-components and
+//             --expect-euler): 0 boundary edges, that many components and
+//             that Euler characteristic
+// Folded edges (interior edges whose triangles face opposite ways), singular
+// vertices (pinches: more than one fan of triangles) and whether a level has
+// the full mesh's topology are reported as information only.
+//
+// Output: one line per level, then a tab-separated `RESULT key=value ...`
+// line. `--table FILE` turns the RESULT lines collected in FILE into the
+// markdown report instead; bench/lod/sweep.sh runs every case and does that.
+//
+//   build/bin/scan2lod_bench_sweep --name NAME --resolution R
+//       (--shape S [--gap-cells G] | --scan-mesh FILE [--size P] [--views V]
+//        | --scans NAME,... | --input FILE...)
+//       [--expect-components C --expect-euler X] [--shared DIR]
+//   build/bin/scan2lod_bench_sweep --table RESULTS [--command TEXT] [--load-at-start TEXT]
+
+#include "acquisition/lattice_normals.h"
+#include "acquisition/load_inputs.h"
+#include "acquisition/range_grid_ply.h"
+#include "acquisition/virtual_scanner.h"
+#include "bench/bench_support.h"
+#include "bench/library_meshes.h"
+#include "bench/model_build.h"
+#include "core/progress.h"
+#include "io/mesh_file.h"
+#include "lod/extract.h"
+#include "lod/lod_array.h"
+#include "measure/topology.h"
+
+#include <CLI/CLI.hpp>
+#include <open3d/geometry/TriangleMesh.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace scan2lod;
+using namespace scan2lod::bench;
+using O3Mesh = open3d::geometry::TriangleMesh;
+
+namespace {
+
+constexpr std::array<double, 12> kPercents = {1, 5, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100};
+
+// ---------------------------------------------------------------------------
+// Inputs.
+
+O3Mesh translated(const std::shared_ptr<O3Mesh>& mesh, double x) {
+  mesh->Translate(Eigen::Vector3d(x, 0, 0));
+  return *mesh;
+}
+
+// The shapes are chosen for what they stress: sharp creases and faces on
+// lattice planes (box, plate, cone), thin parts (plate, thin cylinder), an
+// open non-orientable surface (mobius), two pieces close together
+// (two_spheres, gap_cells cells apart at this resolution), a one-point
+// contact (sphere_touch) and holes (genus2, genus3: crossing tori).
+TriangleMesh make_shape(const std::string& shape, double gap_cells, int resolution) {
+  if (shape == "box") return from_open3d(*O3Mesh::CreateBox(1, 1, 1));
+  if (shape == "plate") return from_open3d(*O3Mesh::CreateBox(1, 1, 0.03));
+  if (shape == "cylinder") return from_open3d(*O3Mesh::CreateCylinder(0.5, 2.0, 80, 8));
+  if (shape == "thin_cylinder") return from_open3d(*O3Mesh::CreateCylinder(0.01, 2.0, 40, 8));
+  if (shape == "cone") return from_open3d(*O3Mesh::CreateCone(0.5, 1.5, 80, 4));
+  if (shape == "arrow") return from_open3d(*O3Mesh::CreateArrow(0.2, 0.4, 1.6, 0.8, 60, 4, 2));
+  if (shape == "icosahedron") return from_open3d(*O3Mesh::CreateIcosahedron(1.0));
+  if (shape == "mobius") return from_open3d(*O3Mesh::CreateMobius(120, 20, 1, 1, 1, 0.6, 1));
+  if (shape == "two_spheres") {
+    // The pair is about 4 wide and the reconstruction pads 4 cells per side,
+    // so a cell is about 4 / (R - 8).
+    const double gap = gap_cells * 4.0 / (resolution - 8);
+    O3Mesh mesh = translated(O3Mesh::CreateSphere(1.0, 100), -(1 + gap / 2));
+    mesh += translated(O3Mesh::CreateSphere(1.0, 100), 1 + gap / 2);
+    return from_open3d(mesh);
+  }
+  if (shape == "sphere_touch") {
+    O3Mesh mesh = *O3Mesh::CreateSphere(1.0, 120);
+    mesh += translated(O3Mesh::CreateSphere(0.25, 60), 1.25);
+    return from_open3d(mesh);
+  }
+  if (shape == "genus2" || shape == "genus3") {
+    // Tori of radius 1, 1.6 apart: neighbouring tubes cross, one hole per torus.
+    const int tori = shape == "genus2" ? 2 : 3;
+    O3Mesh mesh;
+    for (int i = 0; i < tori; ++i) mesh += translated(O3Mesh::CreateTorus(1.0, 0.4, 160, 60), 1.6 * (i - (tori - 1) / 2.0));
+    return from_open3d(mesh);
+  }
+  throw std::invalid_argument("unknown shape '" + shape + "'");
+}
+
+// The points the virtual scanner's range images give, as real scans would.
+OrientedPoints virtual_scan_points(const TriangleMesh& mesh, int views, int size) {
+  VirtualScanOptions options;
+  options.views = views;
+  options.width = options.height = size;
+  OrientedPoints points;
+  for (const VirtualScan& scan : virtual_scan(mesh, options)) points.append(range_image_to_points(scan.image, scan.pose));
+  return points;
+}
+
+// The scans of `conf` named in `stems` (file names without .ply), in the
+// .conf's order and each with its pose: what load_oriented_points makes of a
+// .conf holding only those lines, without writing one.
+OrientedPoints conf_subset_points(const fs::path& conf, const std::vector<std::string>& stems) {
+  OrientedPoints points;
+  std::size_t found = 0;
+  for (const ConfEntry& entry : read_conf(conf.string())) {
+    if (std::find(stems.begin(), stems.end(), fs::path(entry.file).stem().string()) == stems.end()) continue;
+    points.append(range_image_to_points(read_range_grid_ply(entry.file), entry.pose));
+    ++found;
+  }
+  if (found != stems.size()) throw std::invalid_argument("not every --scans name is a scan of " + conf.string());
+  return points;
+}
+
+// ---------------------------------------------------------------------------
+// Measures beyond mesh_topology.
+
+Vec3d triangle_normal(const TriangleMesh& mesh, const Triangle& t) {
+  const Vec3d a = mesh.positions[t[0]].cast<double>();
+  return (mesh.positions[t[1]].cast<double>() - a).cross(mesh.positions[t[2]].cast<double>() - a);
+}
+
+// Interior edges (exactly two triangles) whose triangles face opposite ways.
+std::size_t folded_edges(const TriangleMesh& mesh) {
+  std::vector<std::pair<std::uint64_t, std::int32_t>> edges;  // (edge, triangle)
+  edges.reserve(3 * mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      edges.push_back({edge_key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]), std::int32_t(t)});
+  std::sort(edges.begin(), edges.end());
+  std::size_t folded = 0;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    if (j - i == 2 && triangle_normal(mesh, mesh.triangles[edges[i].second])
+                              .dot(triangle_normal(mesh, mesh.triangles[edges[i + 1].second])) < 0)
+      ++folded;
+    i = j;
+  }
+  return folded;
+}
+
+// Vertices whose triangles form more than one fan (triangles joined through
+// edges at the vertex): surfaces that touch at a single point.
+std::size_t singular_vertices(const TriangleMesh& mesh) {
+  std::vector<std::vector<std::int32_t>> around(mesh.positions.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;  // no surface
+    for (int k = 0; k < 3; ++k) around[tri[k]].push_back(std::int32_t(t));
+  }
+  std::size_t singular = 0;
+  std::vector<int> parent;
+  std::vector<std::pair<std::int32_t, int>> spokes;  // (other end of an edge at v, local triangle)
+  for (std::size_t v = 0; v < around.size(); ++v) {
+    const std::vector<std::int32_t>& fan = around[v];
+    if (fan.size() < 2) continue;
+    parent.resize(fan.size());
+    for (std::size_t i = 0; i < fan.size(); ++i) parent[i] = int(i);
+    const auto root = [&](int i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    spokes.clear();
+    for (std::size_t i = 0; i < fan.size(); ++i)
+      for (const std::int32_t w : mesh.triangles[fan[i]])
+        if (w != std::int32_t(v)) spokes.push_back({w, int(i)});
+    std::sort(spokes.begin(), spokes.end());
+    for (std::size_t i = 1; i < spokes.size(); ++i)
+      if (spokes[i].first == spokes[i - 1].first) parent[root(spokes[i].second)] = root(spokes[i - 1].second);
+    int fans = 0;
+    for (std::size_t i = 0; i < fan.size(); ++i) fans += root(int(i)) == int(i);
+    singular += fans > 1;
+  }
+  return singular;
+}
+
+// ---------------------------------------------------------------------------
+// One case.
+
+struct Level {
+  double percent = 0;
+  std::size_t priority = 0;
+  MeshTopology topology;
+  std::size_t folded = 0, singular = 0;
+  std::int64_t accumulated = 0;  // the table's count
+  std::size_t extracted = 0;     // extract_lod's
+};
+
+struct Expectation {
+  std::size_t components = 0;
+  long euler = 0;
+};
+
+enum Rule { kLoops, kNonManifold, kDegenerate, kAccumulation, kMonotone, kClosed, kRuleCount };
+constexpr std::array<const char*, kRuleCount> kRuleKeys = {"loops", "nm", "degen", "accum", "monotone", "closed"};
+
+// Where each rule first failed and what was seen there; the first to fail overall.
+struct Verdict {
+  std::array<std::string, kRuleCount> failure;  // "" while the rule holds
+  std::string first;
+
+  void fail(Rule rule, const std::string& where_and_what) {
+    if (!failure[rule].empty()) return;
+    failure[rule] = where_and_what;
+    if (first.empty()) first = kRuleKeys[rule];
+  }
+  bool pass() const { return first.empty(); }
+};
+
+template <typename F>
+std::string joined(const std::vector<Level>& levels, F value) {
+  std::string out;
+  for (const Level& l : levels) out += (out.empty() ? "" : "/") + std::to_string(value(l));
+  return out;
+}
+
+template <typename F>
+std::size_t largest(const std::vector<Level>& levels, F value) {
+  std::size_t most = 0;
+  for (const Level& l : levels) most = std::max<std::size_t>(most, value(l));
+  return most;
+}
+
+int run_case(const std::string& name, int resolution, const OrientedPoints& points, double load_seconds,
+             const std::optional<Expectation>& expect) {
+  const auto start = Clock::now();
+  const LodModel model = build_model_timed(points, resolution).model;
+  const double build_seconds = load_seconds + seconds_since(start);
+  const LodArray& lod = model.lod;
+
+  std::vector<Level> levels;
+  std::vector<std::uint8_t> scratch;
+  std::vector<Triangle> triangles;
+  for (const double percent : kPercents) {
+    Level l;
+    l.percent = percent;
+    l.priority = priority_for_percent(lod, percent);
+    extract_lod(model.tree, lod, l.priority, &scratch, &triangles);
+    l.extracted = triangles.size();
+    l.accumulated = lod.accumulated[l.priority];
+    const TriangleMesh mesh = compact_lod(model.tree, triangles);
+    l.topology = mesh_topology(mesh);
+    l.folded = folded_edges(mesh);
+    l.singular = singular_vertices(mesh);
+    levels.push_back(l);
+  }
+  const MeshTopology& full = levels.back().topology;
+
+  Verdict verdict;
+  bool same_topology_as_full = true;
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    const Level& l = levels[i];
+    const MeshTopology& t = l.topology;
+    std::printf("%5.0f %% p=%zu tris=%zu loops=%zu bedges=%zu nm=%zu degen=%zu comps=%zu euler=%ld folded=%zu "
+                "singular=%zu accum=%lld\n",
+                l.percent, l.priority, t.triangles, t.boundary_loops, t.boundary_edges, t.non_manifold_edges,
+                t.degenerate_triangles, t.components, t.euler_characteristic, l.folded, l.singular,
+                (long long)l.accumulated);
+    const std::string at = fixed(l.percent, 0) + " % (priority " + std::to_string(l.priority) + "): ";
+    if (t.boundary_loops > full.boundary_loops)
+      verdict.fail(kLoops, at + format("%zu boundary loops, the full mesh %zu", t.boundary_loops, full.boundary_loops));
+    if (t.non_manifold_edges > 0) verdict.fail(kNonManifold, at + format("%zu non-manifold edges", t.non_manifold_edges));
+    if (t.degenerate_triangles > 0)
+      verdict.fail(kDegenerate, at + format("%zu degenerate triangles", t.degenerate_triangles));
+    if (l.accumulated != std::int64_t(l.extracted))
+      verdict.fail(kAccumulation, at + format("table %lld, extracted %zu", (long long)l.accumulated, l.extracted));
+    if (i > 0 && t.triangles < levels[i - 1].topology.triangles)
+      verdict.fail(kMonotone, at + format("%zu triangles, %zu at %s %%", t.triangles, levels[i - 1].topology.triangles,
+                                          fixed(levels[i - 1].percent, 0).c_str()));
+    if (expect && (t.boundary_edges != 0 || t.components != expect->components || t.euler_characteristic != expect->euler))
+      verdict.fail(kClosed, at + format("%zu boundary edges, %zu components, χ %ld (expected 0, %zu, %ld)",
+                                        t.boundary_edges, t.components, t.euler_characteristic, expect->components,
+                                        expect->euler));
+    // Rims of an open full mesh may shrink or close at coarse levels, so χ
+    // is compared only when the full mesh is closed.
+    same_topology_as_full &= t.boundary_edges <= full.boundary_edges && t.components == full.components &&
+                             (full.boundary_edges > 0 || t.euler_characteristic == full.euler_characteristic);
+  }
+
+  // Between the percent levels: offered priorities never lose triangles, and
+  // the table holds at sampled priorities, offered or not (fixed seed).
+  const std::vector<std::size_t> offered = monotone_priorities(lod);
+  for (std::size_t i = 1; i < offered.size(); ++i)
+    if (lod.accumulated[offered[i]] < lod.accumulated[offered[i - 1]])
+      verdict.fail(kMonotone, format("offered priority %zu: %lld triangles, %lld at offered priority %zu", offered[i],
+                                     (long long)lod.accumulated[offered[i]], (long long)lod.accumulated[offered[i - 1]],
+                                     offered[i - 1]));
+  std::mt19937 rng(1);
+  std::vector<std::size_t> sampled;
+  for (int i = 0; i < 40 && !offered.empty(); ++i) sampled.push_back(offered[rng() % offered.size()]);
+  for (int i = 0; i < 20; ++i) sampled.push_back(rng() % (lod.full() + 1));
+  for (const std::size_t priority : sampled) {
+    extract_lod(model.tree, lod, priority, &scratch, &triangles);
+    if (std::int64_t(triangles.size()) != lod.accumulated[priority])
+      verdict.fail(kAccumulation, format("sampled priority %zu: table %lld, extracted %zu", priority,
+                                         (long long)lod.accumulated[priority], triangles.size()));
+  }
+
+  std::printf("RESULT\tname=%s\tR=%d\tpass=%d\tfirst_fail=%s", name.c_str(), resolution, int(verdict.pass()),
+              verdict.pass() ? "-" : verdict.first.c_str());
+  for (int r = 0; r < kRuleCount; ++r)
+    if (!verdict.failure[r].empty()) std::printf("\tfail.%s=%s", kRuleKeys[r], verdict.failure[r].c_str());
+  std::printf("\texpect=%s\tsame_topology=%d", expect ? format("%zu/%ld", expect->components, expect->euler).c_str() : "-",
+              int(same_topology_as_full));
+  std::printf("\tfull=%zu/%zu/%zu/%ld", full.triangles, full.boundary_loops, full.components, full.euler_characteristic);
+  std::printf("\ttris=%s", joined(levels, [](const Level& l) { return l.topology.triangles; }).c_str());
+  std::printf("\tloops=%s", joined(levels, [](const Level& l) { return l.topology.boundary_loops; }).c_str());
+  std::printf("\tcomps=%s", joined(levels, [](const Level& l) { return l.topology.components; }).c_str());
+  std::printf("\teuler=%s", joined(levels, [](const Level& l) { return l.topology.euler_characteristic; }).c_str());
+  std::printf("\tmax_nm=%zu\tmax_degen=%zu\tmax_folded=%zu\tmax_singular=%zu",
+              largest(levels, [](const Level& l) { return l.topology.non_manifold_edges; }),
+              largest(levels, [](const Level& l) { return l.topology.degenerate_triangles; }),
+              largest(levels, [](const Level& l) { return l.folded; }),
+              largest(levels, [](const Level& l) { return l.singular; }));
+  std::printf("\tnodes=%zu\toffered=%zu\tsampled=%zu\tbuild_s=%.1f\n", model.tree.size(), offered.size(),
+              sampled.size(), build_seconds);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------
+// The report, from the RESULT lines of every case.
+
+using Result = std::map<std::string, std::string>;
+
+std::vector<Result> read_results(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::vector<Result> results;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("RESULT\t", 0) != 0) continue;
+    Result r;
+    std::istringstream fields(line.substr(7));
+    std::string field;
+    while (std::getline(fields, field, '\t')) {
+      const std::size_t eq = field.find('=');
+      if (eq != std::string::npos) r[field.substr(0, eq)] = field.substr(eq + 1);
+    }
+    results.push_back(std::move(r));
+  }
+  return results;
+}
+
+std::string get(const Result& r, const std::string& key) {
+  const auto it = r.find(key);
+  return it == r.end() ? "" : it->second;
+}
+
+// "a/b/c" stays as it is unless every entry is the same: then just that one.
+std::string per_level(const std::string& list) {
+  const std::string first = list.substr(0, list.find('/'));
+  std::string same;
+  for (std::size_t i = 0; i < 12; ++i) same += (i ? "/" : "") + first;
+  return list == same ? first : list;
+}
+
+// "a/b/c" as "a / b / c".
+std::string spaced(std::string list) {
+  for (std::size_t p = list.find('/'); p != std::string::npos; p = list.find('/', p + 3)) list.replace(p, 1, " / ");
+  return list;
+}
+
+// Rows grouped by case name (in the order names first appear), then by R.
+void sort_cases(std::vector<Result>* results) {
+  std::vector<std::string> names;
+  for (const Result& r : *results)
+    if (std::find(names.begin(), names.end(), get(r, "name")) == names.end()) names.push_back(get(r, "name"));
+  const auto rank = [&](const Result& r) {
+    return std::pair(std::find(names.begin(), names.end(), get(r, "name")) - names.begin(), std::stoi(get(r, "R")));
+  };
+  std::stable_sort(results->begin(), results->end(),
+                   [&](const Result& a, const Result& b) { return rank(a) < rank(b); });
+}
+
+int print_table(const std::string& path, const std::string& command, const std::string& load_at_start) {
+  std::vector<Result> results = read_results(path);
+  sort_cases(&results);
+  std::size_t passed = 0;
+  for (const Result& r : results) passed += get(r, "pass") == "1";
+
+  std::printf("# LOD robustness sweep: crack-freeness beyond the bunny\n\n");
+  std::printf("%s  \n", run_header_line(load_at_start, load_average()).c_str());
+  if (!command.empty()) std::printf("Command: `%s`  \n", command.c_str());
+  std::printf("%s", openmp_line().c_str());
+  const std::string revision = source_revision();
+  if (!revision.empty()) std::printf("Source: %s (at run time)  \n", revision.c_str());
+  std::printf("Tool: `scan2lod_bench_sweep` (bench/lod/shape_sweep.cpp), one process per case\n\n");
+  std::printf("**%zu of %zu cases pass.**\n\n", passed, results.size());
+
+  std::printf(
+      "Each case is built as `scan2lod build` builds it, at resolution R, and its levels at 1, 5, 10, 20, 30, "
+      "…, 100 %% (`priority_for_percent`, the viewer's slider) are measured. A case passes when at every level: "
+      "boundary loops ≤ the full mesh's (*loops*; a new loop is a crack), 0 non-manifold edges (*nm*), 0 "
+      "degenerate triangles (*degen*), the accumulation table's count = the extracted count, also at 60 sampled "
+      "priorities, offered or not (*accum*), and counts never fall over the levels and the offered priorities "
+      "(*monotone*). Shapes with a known answer (the *expected* column: components / χ) must also have 0 boundary "
+      "edges and that topology at every level (*closed*).\n\n");
+  std::printf(
+      "Shapes are Open3D's, scanned by the virtual scanner from 14 views at 256² (*virtual P*: the bunny mesh at "
+      "P²); `bun_sub2` and `bun_sub3` are bun000 + bun045 and bun000 + bun090 + bun180 of `bun.conf`. Per-level "
+      "lists run over the 12 levels and are shown once when all equal. *Same topology*: every level has the full "
+      "mesh's components and (closed full meshes) χ, information only, as are folded edges (interior edges whose "
+      "triangles face opposite ways) and singular vertices (pinches). *s*: scanning + model build.\n\n");
+
+  std::printf("| case | R | result | failed rules (first level) | expected | full: triangles / loops / comps / χ | "
+              "triangles at 1 %% | loops | components | χ | same topology | max nm | max degen | max folded | "
+              "max singular | s |\n");
+  std::printf("|---|--:|---|---|---|---|--:|---|---|---|---|--:|--:|--:|--:|--:|\n");
+  for (const Result& r : results) {
+    if (get(r, "pass").empty()) {
+      std::printf("| %s | %s | **%s** | | | | | | | | | | | | | |\n", get(r, "name").c_str(), get(r, "R").c_str(),
+                  get(r, "status").c_str());
+      continue;
+    }
+    std::string failed;
+    for (const char* rule : kRuleKeys) {
+      const std::string f = get(r, std::string("fail.") + rule);
+      if (f.empty()) continue;
+      if (!failed.empty()) failed += ", ";
+      failed += std::string(rule) + " @ " + f.substr(0, f.find(" ("));  // "closed @ 5 %"
+    }
+    std::printf("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n",
+                get(r, "name").c_str(), get(r, "R").c_str(), get(r, "pass") == "1" ? "pass" : "**FAIL**",
+                failed.empty() ? "–" : failed.c_str(), get(r, "expect").c_str(),
+                spaced(get(r, "full")).c_str(),
+                get(r, "tris").substr(0, get(r, "tris").find('/')).c_str(), per_level(get(r, "loops")).c_str(),
+                per_level(get(r, "comps")).c_str(), per_level(get(r, "euler")).c_str(),
+                get(r, "same_topology") == "1" ? "yes" : "no", get(r, "max_nm").c_str(), get(r, "max_degen").c_str(),
+                get(r, "max_folded").c_str(), get(r, "max_singular").c_str(), get(r, "build_s").c_str());
+  }
+
+  std::printf("\n## Failing cases: first failing rule and where\n\n");
+  if (passed == results.size()) std::printf("None.\n");
+  for (const Result& r : results) {
+    if (get(r, "pass") == "1") continue;
+    if (get(r, "pass").empty()) {
+      std::printf("- **%s R=%s**: %s (see its log)\n", get(r, "name").c_str(), get(r, "R").c_str(),
+                  get(r, "status").c_str());
+      continue;
+    }
+    const std::string first = get(r, "first_fail");
+    std::printf("- **%s R=%s**: *%s* at %s", get(r, "name").c_str(), get(r, "R").c_str(), first.c_str(),
+                get(r, "fail." + first).c_str());
+    std::string others;
+    for (const char* rule : kRuleKeys)
+      if (rule != first && !get(r, std::string("fail.") + rule).empty())
+        others += (others.empty() ? "" : "; ") + std::string("*") + rule + "* at " + get(r, std::string("fail.") + rule);
+    std::printf("%s\n", others.empty() ? "" : (". Also " + others).c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Checks every level of the LOD model of one case (a shape, scans or a mesh) for cracks and "
+               "topology errors; or, with --table, makes the markdown report of collected RESULT lines"};
+  std::string name, shape, scan_mesh, table, command, load_at_start = load_average();
+  std::string shared = (fs::path(SCAN2LOD_SOURCE_DIR) / ".." / "shared").lexically_normal().string();
+  std::vector<std::string> inputs, scans;
+  double gap_cells = 0;
+  int resolution = 64, views = 14, size = 256;
+  std::optional<std::size_t> expect_components;
+  std::optional<long> expect_euler;
+  app.add_option("--name", name, "The case's name in the RESULT line");
+  app.add_option("--resolution,-r", resolution, "Leaf cubes per side (a power of two)");
+  auto* shape_option = app.add_option("--shape", shape,
+                                      "An Open3D shape, virtually scanned: box, plate, cylinder, thin_cylinder, cone, "
+                                      "arrow, icosahedron, mobius, two_spheres, sphere_touch, genus2, genus3");
+  app.add_option("--gap-cells", gap_cells, "two_spheres: the gap between them in cells at this resolution")
+      ->needs(shape_option);
+  auto* scan_mesh_option =
+      app.add_option("--scan-mesh", scan_mesh, "A mesh to scan virtually (relative to <shared>/data/bunny)");
+  app.add_option("--views", views, "Virtual scans per shape or mesh")->check(CLI::PositiveNumber);
+  app.add_option("--size", size, "Pixels per side of each virtual scan")->check(CLI::PositiveNumber);
+  auto* scans_option = app.add_option("--scans", scans, "Scans of <shared>/data/bunny/data/bun.conf, by name "
+                                                        "(bun000,bun045): that subset with its poses")
+                           ->delimiter(',');
+  auto* input_option =
+      app.add_option("--input", inputs, "Inputs as `scan2lod build` takes them (relative to <shared>/data/bunny)");
+  shape_option->excludes(scan_mesh_option)->excludes(scans_option)->excludes(input_option);
+  scan_mesh_option->excludes(scans_option)->excludes(input_option);
+  scans_option->excludes(input_option);
+  auto* components_option =
+      app.add_option("--expect-components", expect_components, "The shape's components, for the closed rule");
+  app.add_option("--expect-euler", expect_euler, "The shape's Euler characteristic, for the closed rule")
+      ->needs(components_option);
+  components_option->needs("--expect-euler");
+  app.add_option("--shared", shared, "The shared data folder (default: ../shared beside the source tree)");
+  app.add_option("--table", table, "Print the markdown report of the RESULT lines in this file and exit");
+  app.add_option("--command", command, "--table: the command to name in the report's header");
+  app.add_option("--load-at-start", load_at_start, "--table: the load average when the sweep started");
+  CLI11_PARSE(app, argc, argv);
+  Progress::set_quiet(true);
+
+  try {
+    if (!table.empty()) return print_table(table, command, load_at_start);
+    const fs::path bunny = fs::path(shared) / "data" / "bunny";
+    const auto start = Clock::now();
+    OrientedPoints points;
+    if (!shape.empty()) {
+      points = virtual_scan_points(make_shape(shape, gap_cells, resolution), views, size);
+    } else if (!scan_mesh.empty()) {
+      points = virtual_scan_points(read_mesh((bunny / scan_mesh).string()), views, size);
+    } else if (!scans.empty()) {
+      points = conf_subset_points(bunny / "data" / "bun.conf", scans);
+    } else if (!inputs.empty()) {
+      for (std::string& input : inputs) input = (bunny / input).string();
+      points = load_oriented_points(inputs);
+    } else {
+      std::fprintf(stderr, "no case: give --shape, --scan-mesh, --scans or --input (see --help)\n");
+      return 2;
+    }
+    std::optional<Expectation> expect;
+    if (expect_components) expect = Expectation{*expect_components, *expect_euler};
+    return run_case(name.empty() ? "case" : name, resolution, points, seconds_since(start), expect);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "scan2lod_bench_sweep: %s\n", e.what());
+    return 1;
+  }
+}
