@@ -142,8 +142,8 @@ OrientedPoints conf_subset_points(const fs::path& conf, const std::vector<std::s
 // Measures beyond mesh_topology.
 
 Vec3d triangle_normal(const TriangleMesh& mesh, const Triangle& t) {
-  const Vec3d a = mesh.positions[t[0]].cast<double>();
-  return (mesh.positions[t[1]].cast<double>() - a).cross(mesh.positions[t[2]].cast<double>() - a);
+  const Vec3f& a = mesh.positions[t[0]];
+  return Vec3d((mesh.positions[t[1]] - a).cast<double>().cross((mesh.positions[t[2]] - a).cast<double>()));
 }
 
 // Interior edges (exactly two triangles) whose triangles face opposite ways.
@@ -327,7 +327,7 @@ int run_case(const std::string& name, int resolution, const OrientedPoints& poin
               verdict.pass() ? "-" : verdict.first.c_str());
   for (int r = 0; r < kRuleCount; ++r)
     if (!verdict.failure[r].empty()) std::printf("\tfail.%s=%s", kRuleKeys[r], verdict.failure[r].c_str());
-  std::printf("\texpect=%s\tsame_topology=%d", expect ? format("%zu/%ld", expect->components, expect->euler).c_str() : "-",
+  std::printf("\texpect=%s\tsame_topology=%d", expect ? format("%zu/%ld", expect->components, expect->euler).c_str() : "–",
               int(same_topology_as_full));
   std::printf("\tfull=%zu/%zu/%zu/%ld", full.triangles, full.boundary_loops, full.components, full.euler_characteristic);
   std::printf("\ttris=%s", joined(levels, [](const Level& l) { return l.topology.triangles; }).c_str());
@@ -439,12 +439,16 @@ int print_table(const std::string& path, const std::string& command, const std::
                   get(r, "status").c_str());
       continue;
     }
+    // The first rule to fail first, then the others: "closed @ 1 %, degen @ 60 %".
     std::string failed;
-    for (const char* rule : kRuleKeys) {
-      const std::string f = get(r, std::string("fail.") + rule);
+    std::vector<std::string> rules = {get(r, "first_fail")};
+    for (const char* rule : kRuleKeys)
+      if (rule != rules.front()) rules.push_back(rule);
+    for (const std::string& rule : rules) {
+      const std::string f = get(r, "fail." + rule);
       if (f.empty()) continue;
       if (!failed.empty()) failed += ", ";
-      failed += std::string(rule) + " @ " + f.substr(0, f.find(" ("));  // "closed @ 5 %"
+      failed += rule + " @ " + f.substr(0, f.find(" ("));
     }
     std::printf("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n",
                 get(r, "name").c_str(), get(r, "R").c_str(), get(r, "pass") == "1" ? "pass" : "**FAIL**",
@@ -461,7 +465,7 @@ int print_table(const std::string& path, const std::string& command, const std::
   for (const Result& r : results) {
     if (get(r, "pass") == "1") continue;
     if (get(r, "pass").empty()) {
-      std::printf("- **%s R=%s**: %s (see its log)\n", get(r, "name").c_str(), get(r, "R").c_str(),
+      std::printf("- **%s R=%s**: %s (sweep.sh --logs DIR keeps its output)\n", get(r, "name").c_str(), get(r, "R").c_str(),
                   get(r, "status").c_str());
       continue;
     }
