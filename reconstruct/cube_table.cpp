@@ -10,19 +10,11 @@ namespace {
 
 int corner_index(int x, int y, int z) { return x | (y << 1) | (z << 2); }
 
-int compute_edge_corner(int edge, int end) {
-  int axis = edge / 4, j = edge % 4;
-  int o[3];
-  o[axis] = end;
-  o[(axis + 1) % 3] = j & 1;
-  o[(axis + 2) % 3] = (j >> 1) & 1;
-  return corner_index(o[0], o[1], o[2]);
-}
 
 int edge_between(int a, int b) {
   for (int e = 0; e < 12; ++e)
-    if ((compute_edge_corner(e, 0) == a && compute_edge_corner(e, 1) == b) ||
-        (compute_edge_corner(e, 0) == b && compute_edge_corner(e, 1) == a))
+    if ((edge_corner(e, 0) == a && edge_corner(e, 1) == b) ||
+        (edge_corner(e, 0) == b && edge_corner(e, 1) == a))
       return e;
   assert(false);
   return -1;
@@ -51,8 +43,8 @@ bool share_face(int e0, int e1) {
     for (int side = 0; side < 2; ++side) {
       bool on0 = true, on1 = true;
       for (int end = 0; end < 2; ++end) {
-        on0 &= ((compute_edge_corner(e0, end) >> axis) & 1) == side;
-        on1 &= ((compute_edge_corner(e1, end) >> axis) & 1) == side;
+        on0 &= ((edge_corner(e0, end) >> axis) & 1) == side;
+        on1 &= ((edge_corner(e1, end) >> axis) & 1) == side;
       }
       if (on0 && on1) return true;
     }
@@ -60,7 +52,7 @@ bool share_face(int e0, int e1) {
 }
 
 Eigen::Vector3f edge_midpoint(int e) {
-  int a = compute_edge_corner(e, 0);
+  int a = edge_corner(e, 0);
   Eigen::Vector3f p(float(a & 1), float((a >> 1) & 1), float((a >> 2) & 1));
   p[e / 4] = 0.5f;
   return p;
@@ -155,6 +147,5 @@ const std::array<CubeCase, 256>& cube_cases() {
   return table;
 }
 
-int edge_corner(int edge, int end) { return compute_edge_corner(edge, end); }
 
 }  // namespace scan2lod

@@ -32,6 +32,16 @@ const std::array<CubeCase, 256>& cube_cases();
 
 // Corner offsets and the two corners of each edge.
 constexpr std::array<int, 3> corner_offset(int c) { return {c & 1, (c >> 1) & 1, (c >> 2) & 1}; }
-int edge_corner(int edge, int end);  // end 0: lower corner, 1: upper corner
+// End 0: the lower corner, 1: the upper. Edge e runs along axis e / 4; bits 0
+// and 1 of e % 4 are its coordinates on the next two axes. Inline: the octree
+// build calls it in its inner loops.
+constexpr int edge_corner(int edge, int end) {
+  const int axis = edge / 4, j = edge % 4;
+  int o[3] = {0, 0, 0};
+  o[axis] = end;
+  o[(axis + 1) % 3] = j & 1;
+  o[(axis + 2) % 3] = (j >> 1) & 1;
+  return o[0] | (o[1] << 1) | (o[2] << 2);
+}
 
 }  // namespace scan2lod
