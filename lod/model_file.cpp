@@ -381,7 +381,7 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
   read("COLR", &t.colors);
   read("LODO", &model.lod.order);
   read("LODA", &model.lod.accumulated);
-  if (by_tag.count(fourcc("PINC"))) {  // format 1.1; 1.0 files pin nothing
+  if (by_tag.count(fourcc("PINC"))) {  // optional (added in 1.1): without it nothing is pinned
     std::vector<std::uint64_t> pinned;
     read("PINC", &pinned);
     if (pinned.size() != 1) fail("section 'PINC' must hold one count, not " + std::to_string(pinned.size()));
