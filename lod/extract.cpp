@@ -191,6 +191,28 @@ void mark_children(const McOctree& tree, const LodArray& lod, std::size_t begin,
 
 }  // namespace
 
+void node_triangle_counts(const McOctree& tree, const std::int32_t* nodes, int size,
+                          const std::vector<std::uint8_t>& expanded, std::int32_t* counts) {
+  constexpr int kBatch = 32;
+  for (int first = 0; first < size; first += kBatch) {
+    const int n = std::min(kBatch, size - first);
+    const std::int32_t* batch = nodes + first;
+    for (int i = 0; i < n; ++i)
+      if (std::size_t(batch[i]) < tree.internal_nodes()) {
+        const auto* around = tree.neighbours[std::size_t(batch[i])].data();
+        __builtin_prefetch(around);
+        __builtin_prefetch(around + 26);
+      }
+    TransitionInput inputs[kBatch];
+    bool transition[kBatch];
+    for (int i = 0; i < n; ++i)
+      if ((transition[i] = transition_of(tree, batch[i], expanded, &inputs[i]))) prefetch_transition(inputs[i]);
+    for (int i = 0; i < n; ++i)
+      counts[first + i] =
+          transition[i] ? transition_triangle_count(inputs[i]) : tree.triangle_counts[std::size_t(batch[i])];
+  }
+}
+
 void mark_cut(const McOctree& tree, const LodArray& lod, std::size_t priority, std::uint8_t* flags) {
   if (priority == 0) flags[0] = kCut;
   mark_expanded(lod, 0, priority, flags);

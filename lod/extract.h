@@ -42,6 +42,11 @@ void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::u
 // How many triangles emit_node appends.
 int node_triangle_count(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded);
 
+// node_triangle_count for nodes[0, size) into counts: the nodes' data are
+// asked for all at once, so that their cache misses overlap.
+void node_triangle_counts(const McOctree& tree, const std::int32_t* nodes, int size,
+                          const std::vector<std::uint8_t>& expanded, std::int32_t* counts);
+
 // A self-contained mesh of those triangles: only the vertices they use, with
 // normals and colours.
 TriangleMesh compact_lod(const McOctree& tree, const std::vector<Triangle>& triangles);

@@ -182,7 +182,6 @@ LodArray number_nodes(const McOctree& tree) {
   // node replaces its triangles by its children's and re-triangulates the
   // nodes of the cut beside it, whose transitions change.
   std::vector<std::int32_t> current(n, 0);  // triangles each cut node emits now
-  auto count = [&](std::int32_t node) { return std::int32_t(node_triangle_count(tree, node, expanded)); };
   // Hole patches show once all the nodes around their rims have expanded.
   std::vector<std::int32_t> patch_waiting(tree.patch_groups());
   std::vector<std::vector<std::int32_t>> patches_of(n);
@@ -196,27 +195,29 @@ LodArray number_nodes(const McOctree& tree) {
   enter_cut(0);
   std::int64_t triangles = current[0] = tree.triangle_counts[0];
   lod.accumulated.push_back(triangles);
+  // What an expansion recounts: its children, and the cut nodes across a
+  // face or an edge, which re-triangulate (a finer node across a corner alone
+  // splits nothing, lod/transition.h); counted in one batch.
+  std::int32_t recount[8 + 18], counts[8 + 18];
   while (!queue.empty()) {
     const std::int32_t node = queue.top().node;
     queue.pop();
     lod.order.push_back(node);
     expand(node);
     triangles -= current[node];
-    for (int c = 0; c < tree.child_counts[node]; ++c) {
-      const std::int32_t child = tree.first_child[node] + c;
-      triangles += current[child] = count(child);
-      enter_cut(child);
-    }
-    // Only the cut nodes across a face or an edge re-triangulate: a finer node
-    // across a corner alone splits nothing (lod/transition.h).
+    int size = 0;
+    for (int c = 0; c < tree.child_counts[node]; ++c) recount[size++] = tree.first_child[node] + c;
     if (std::size_t(node) < tree.internal_nodes())
       for (const int c : splitting_cells())
         if (const std::int32_t q = tree.neighbours[node][std::size_t(c)];
-            q >= 0 && !expanded[q] && expanded[tree.parents[q]]) {
-          const std::int32_t now = count(q);
-          triangles += now - current[q];
-          current[q] = now;
-        }
+            q >= 0 && !expanded[q] && expanded[tree.parents[q]])
+          recount[size++] = q;
+    node_triangle_counts(tree, recount, size, expanded, counts);
+    for (int i = 0; i < size; ++i) {
+      triangles += counts[i] - current[recount[i]];
+      current[recount[i]] = counts[i];
+    }
+    for (int c = 0; c < tree.child_counts[node]; ++c) enter_cut(tree.first_child[node] + c);
     for (std::int32_t g : patches_of[node])
       if (--patch_waiting[g] == 0) triangles += tree.patch_group_first[g + 1] - tree.patch_group_first[g];
     lod.accumulated.push_back(triangles);
