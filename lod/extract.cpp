@@ -42,9 +42,16 @@ constexpr int kChunks = 32;
 // ... and from this many, their cut is marked by all cores too.
 constexpr std::size_t kTeamMarksFrom = 8192;
 
-}  // namespace
+// The first node (or LOD array entry) of chunk c of [0, total).
+std::size_t chunk_begin(std::size_t total, int c) { return total * std::size_t(c) / kChunks; }
 
-namespace {
+// Starts loading the neighbours transition_of reads.
+void prefetch_neighbours(const McOctree& tree, std::size_t node) {
+  if (node >= tree.internal_nodes()) return;
+  const auto* around = tree.neighbours[node].data();
+  __builtin_prefetch(around);
+  __builtin_prefetch(around + 26);
+}
 
 // The transition input of a node of the cut, or false when it emits its own
 // triangles (no finer node around it).
@@ -105,7 +112,6 @@ void emit_range(const McOctree& tree, const std::vector<std::uint8_t>& marks, st
   bool in_run = false;  // the newest pending entry is a run still growing
   // Nodes above the leaves read their neighbours, a miss each unless asked
   // for ahead.
-  const std::size_t internal = std::min(end, tree.internal_nodes());
   constexpr std::size_t kNeighboursAhead = 8;
   for (std::size_t node = begin; node < end; ++node) {
     // Eight flags at a time where none is in the cut: small levels are
@@ -118,11 +124,7 @@ void emit_range(const McOctree& tree, const std::vector<std::uint8_t>& marks, st
         continue;
       }
     }
-    if (node + kNeighboursAhead < internal) {
-      const auto* ahead = tree.neighbours[node + kNeighboursAhead].data();
-      __builtin_prefetch(ahead);
-      __builtin_prefetch(ahead + 26);
-    }
+    if (node + kNeighboursAhead < end) prefetch_neighbours(tree, node + kNeighboursAhead);
     if (marks[node] != kCut) continue;
     TransitionInput in;
     if (transition_of(tree, std::int32_t(node), marks, &in)) {
@@ -150,28 +152,6 @@ void emit_range(const McOctree& tree, const std::vector<std::uint8_t>& marks, st
   while (head != tail) emit_front();
 }
 
-}  // namespace
-
-void emit_cut(const McOctree& tree, const std::vector<std::uint8_t>& flags, std::vector<Triangle>* triangles,
-              std::vector<CutBlock>* blocks) {
-  emit_range(tree, flags, 0, tree.size(), triangles, blocks);
-}
-
-void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
-               std::vector<Triangle>* triangles) {
-  TransitionInput in;
-  if (transition_of(tree, node, expanded, &in)) return triangulate_transition(in, triangles);
-  const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
-  triangles->insert(triangles->end(), first, first + tree.triangle_counts[node]);
-}
-
-int node_triangle_count(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded) {
-  TransitionInput in;
-  return transition_of(tree, node, expanded, &in) ? transition_triangle_count(in) : tree.triangle_counts[node];
-}
-
-namespace {
-
 // mark_cut in two passes over entries [begin, end) of the LOD array; a pass
 // over every entry must finish before the second starts. Each node is written
 // by one entry in each pass (the parent of a cut node is the only expansion
@@ -189,7 +169,31 @@ void mark_children(const McOctree& tree, const LodArray& lod, std::size_t begin,
   }
 }
 
+
 }  // namespace
+
+void emit_cut(const McOctree& tree, const std::vector<std::uint8_t>& flags, std::vector<Triangle>* triangles,
+              std::vector<CutBlock>* blocks) {
+  emit_range(tree, flags, 0, tree.size(), triangles, blocks);
+}
+
+void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
+               std::vector<Triangle>* triangles) {
+  TransitionInput in;
+  if (transition_of(tree, node, expanded, &in)) return triangulate_transition(in, triangles);
+  const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
+  triangles->insert(triangles->end(), first, first + tree.triangle_counts[node]);
+}
+
+void prefetch_node(const McOctree& tree, std::int32_t node) {
+  const std::size_t n = std::size_t(node);
+  __builtin_prefetch(&tree.first_triangle[n]);
+  if (n >= tree.internal_nodes()) return;
+  prefetch_neighbours(tree, n);
+  prefetch_crossings(tree.sub_edge_vertices[n].data(), tree.edge_vertices[n].data());
+  __builtin_prefetch(&tree.boundary_inside[n]);
+  __builtin_prefetch(&tree.centre_vertices[n]);
+}
 
 void node_triangle_counts(const McOctree& tree, const std::int32_t* nodes, int size,
                           const std::vector<std::uint8_t>& expanded, std::int32_t* counts) {
@@ -197,12 +201,7 @@ void node_triangle_counts(const McOctree& tree, const std::int32_t* nodes, int s
   for (int first = 0; first < size; first += kBatch) {
     const int n = std::min(kBatch, size - first);
     const std::int32_t* batch = nodes + first;
-    for (int i = 0; i < n; ++i)
-      if (std::size_t(batch[i]) < tree.internal_nodes()) {
-        const auto* around = tree.neighbours[std::size_t(batch[i])].data();
-        __builtin_prefetch(around);
-        __builtin_prefetch(around + 26);
-      }
+    for (int i = 0; i < n; ++i) prefetch_neighbours(tree, std::size_t(batch[i]));
     TransitionInput inputs[kBatch];
     bool transition[kBatch];
     for (int i = 0; i < n; ++i)
@@ -271,16 +270,16 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
     if (team_marks) {
 #pragma omp for schedule(static)
       for (int c = 0; c < kChunks; ++c)
-        mark_expanded(lod, priority * std::size_t(c) / kChunks, priority * std::size_t(c + 1) / kChunks, flags);
+        mark_expanded(lod, chunk_begin(priority, c), chunk_begin(priority, c + 1), flags);
 #pragma omp for schedule(static)
       for (int c = 0; c < kChunks; ++c)
-        mark_children(tree, lod, priority * std::size_t(c) / kChunks, priority * std::size_t(c + 1) / kChunks, flags);
+        mark_children(tree, lod, chunk_begin(priority, c), chunk_begin(priority, c + 1), flags);
     }
 #pragma omp for schedule(dynamic, 1)
     for (int c = 0; c < kChunks; ++c) {
       std::vector<Triangle>& part = parts[std::size_t(c)];
       part.clear();
-      emit_range(tree, marks, n * std::size_t(c) / kChunks, n * std::size_t(c + 1) / kChunks, &part);
+      emit_range(tree, marks, chunk_begin(n, c), chunk_begin(n, c + 1), &part);
     }
 #pragma omp single
     {
@@ -298,7 +297,7 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
       std::copy(parts[std::size_t(c)].begin(), parts[std::size_t(c)].end(), triangles->begin() + std::ptrdiff_t(offsets[c]));
 #pragma omp for schedule(static) nowait
     for (int c = 0; c < kChunks; ++c)
-      std::fill(flags + n * std::size_t(c) / kChunks, flags + n * std::size_t(c + 1) / kChunks, 0);
+      std::fill(flags + chunk_begin(n, c), flags + chunk_begin(n, c + 1), 0);
   }
 }
 

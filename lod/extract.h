@@ -39,13 +39,15 @@ void emit_cut(const McOctree& tree, const std::vector<std::uint8_t>& flags, std:
 void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
                std::vector<Triangle>* triangles);
 
-// How many triangles emit_node appends.
-int node_triangle_count(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded);
-
-// node_triangle_count for nodes[0, size) into counts: the nodes' data are
-// asked for all at once, so that their cache misses overlap.
+// How many triangles emit_node appends for each of nodes[0, size), into
+// counts: the nodes' data are asked for all at once, so that their cache
+// misses overlap.
 void node_triangle_counts(const McOctree& tree, const std::int32_t* nodes, int size,
                           const std::vector<std::uint8_t>& expanded, std::int32_t* counts);
+
+// Starts loading what emit_node reads of `node`, its flags aside: for a
+// caller that knows a few nodes ahead which ones it will emit.
+void prefetch_node(const McOctree& tree, std::int32_t node);
 
 // A self-contained mesh of those triangles: only the vertices they use, with
 // normals and colours.

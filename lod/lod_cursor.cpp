@@ -150,22 +150,11 @@ void LodCursor::collapse(std::int32_t node) {
 }
 
 void LodCursor::prefetch(std::int32_t node) const {
-  const McOctree& tree = *tree_;
   const std::size_t n = std::size_t(node);
-  __builtin_prefetch(&tree.parents[n]);
+  __builtin_prefetch(&tree_->parents[n]);
   __builtin_prefetch(&block_count_[n]);
   __builtin_prefetch(&block_first_[n]);
-  __builtin_prefetch(&tree.first_triangle[n]);
-  if (n >= tree.internal_nodes()) return;
-  const char* around = reinterpret_cast<const char*>(tree.neighbours[n].data());
-  __builtin_prefetch(around);
-  __builtin_prefetch(around + 104);
-  const char* sub = reinterpret_cast<const char*>(tree.sub_edge_vertices[n].data());
-  for (int at = 0; at < kSubEdges * 4 + 64; at += 64) __builtin_prefetch(sub + at);
-  __builtin_prefetch(tree.edge_vertices[n].data());
-  __builtin_prefetch(tree.edge_vertices[n].data() + 11);
-  __builtin_prefetch(&tree.boundary_inside[n]);
-  __builtin_prefetch(&tree.centre_vertices[n]);
+  prefetch_node(*tree_, node);
 }
 
 void LodCursor::mark(std::int32_t node) {

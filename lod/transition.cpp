@@ -284,12 +284,16 @@ const std::uint8_t* cached_slots(const TransitionInput& in) {
 
 }  // namespace
 
+void prefetch_crossings(const std::int32_t* sub_edge_vertices, const std::int32_t* edge_vertices) {
+  const char* sub = reinterpret_cast<const char*>(sub_edge_vertices);
+  for (int at = 0; at < kSubEdges * 4 + 64; at += 64) __builtin_prefetch(sub + at);
+  __builtin_prefetch(edge_vertices);
+  __builtin_prefetch(edge_vertices + 11);
+}
+
 void prefetch_transition(const TransitionInput& in) {
   memo.offsets.prefetch(memo_key(in));
-  const char* sub = reinterpret_cast<const char*>(in.sub_edge_vertices);
-  for (int at = 0; at < kSubEdges * 4 + 64; at += 64) __builtin_prefetch(sub + at);
-  __builtin_prefetch(in.edge_vertices);
-  __builtin_prefetch(in.edge_vertices + 11);
+  prefetch_crossings(in.sub_edge_vertices, in.edge_vertices);
 }
 
 int transition_triangle_count(const TransitionInput& in) { return cached_slots(in)[0]; }

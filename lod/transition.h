@@ -59,6 +59,9 @@ void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* ou
 // few nodes ahead, it hides a cache miss per node.
 void prefetch_transition(const TransitionInput& in);
 
+// Starts loading a node's crossings (TransitionInput's two vertex arrays).
+void prefetch_crossings(const std::int32_t* sub_edge_vertices, const std::int32_t* edge_vertices);
+
 // How many triangles triangulate_transition appends for `in`.
 int transition_triangle_count(const TransitionInput& in);
 
