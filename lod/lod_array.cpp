@@ -12,11 +12,12 @@ namespace scan2lod {
 namespace {
 
 // Nodes that expand before all others: the ancestors of every leaf on the full
-// mesh's rim, of every hole patch's rim and of every node with a crossing the
-// leaves lack, and, closed over the neighbour rule, what they wait for. A
-// coarse node there would span the rim (a sheet past the open edge, seams with
-// boundary edges), hide a patch's hole or show surface the leaves do not have;
-// with these expanded, levels keep the full mesh's boundary.
+// mesh's rim or with triangles clean-up dropped, of every hole patch's rim, of
+// every node with a crossing at a patch's vertex or one the leaves lack, and,
+// closed over the neighbour rule, what they wait for. A coarse node there
+// would span the rim (a sheet past the open edge, seams with boundary edges),
+// hide a patch's hole, close a patch's loop a second time or show surface the
+// leaves do not have; with these expanded, levels keep the full mesh's boundary.
 template <class Dependencies>
 std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies& dependencies) {
   const std::size_t n = tree.size();
@@ -41,50 +42,38 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
   auto pin = [&](std::int32_t node) {
     for (; node >= 0 && !pinned[node]; node = tree.parents[node]) pinned[node] = 1;
   };
+  // Leaves on the rim, and leaves whose clean-up dropped some of their
+  // triangles (a speck or fin beside kept surface): they keep the signs that
+  // made those triangles, so a coarse node over them, or a transition beside
+  // them, would join those crossings into surface whose edges no full-mesh
+  // triangle has.
+  const auto& cases = cube_cases();
   for (std::size_t node = 0; node < n; ++node) {
     if (!tree.is_leaf(node) || tree.parents[node] < 0) continue;
-    for (std::int32_t t = 0; t < tree.triangle_counts[node]; ++t)
+    bool pins = tree.triangle_counts[node] < cases[tree.cases[node]].triangle_count;
+    for (std::int32_t t = 0; t < tree.triangle_counts[node] && !pins; ++t)
       for (std::int32_t e : edges.of_triangle[std::size_t(first_of_leaf[node] + t)])
-        if (edges.uses[std::size_t(e)] == 1) pin(tree.parents[node]);  // on the rim
+        pins = pins || edges.uses[std::size_t(e)] == 1;
+    if (pins) pin(tree.parents[node]);
   }
-  // A leaf whose clean-up dropped some of its triangles (a speck or fin beside
-  // kept surface) still has the signs that made them; a coarse node over it,
-  // or a transition beside it, would join those crossings into surface whose
-  // edges no full-mesh triangle has: a new boundary.
-  const auto& cases = cube_cases();
-  for (std::size_t node = 0; node < n; ++node)
-    if (tree.is_leaf(node) && tree.parents[node] >= 0 &&
-        tree.triangle_counts[node] < cases[tree.cases[node]].triangle_count)
-      pin(tree.parents[node]);
   for (std::int32_t node : tree.patch_needs) pin(node);
-  // Every node with a patch's vertex among its crossings, not only the
-  // parents of the leaves that hold the patch's rim edges: a coarse node there
-  // can close the patch's loop with a triangle of its own (an edge of three
-  // triangles on a Mobius strip).
-  std::vector<std::uint8_t> on_patch(tree.positions.size(), 0);
+  // Nodes with a crossing at a hole patch's vertex, which could close the
+  // patch's loop with a triangle of their own (an edge of three triangles on
+  // a Mobius strip), or with a crossing the leaves have no vertex for
+  // (mc_octree.cpp adds one), whose signs see surface the leaves do not have.
+  // Both kinds of vertex, flagged; a node's crossings include its transitions'.
+  std::vector<std::uint8_t> pinning(tree.positions.size(), 0);
   for (const Triangle& t : tree.patch_triangles)
-    for (const std::int32_t v : t) on_patch[std::size_t(v)] = 1;
-  auto touches_patch = [&](std::size_t node) {
-    bool touches = false;
-    for (const std::int32_t v : tree.edge_vertices[node]) touches = touches || (v >= 0 && on_patch[std::size_t(v)]);
-    for (const std::int32_t v : tree.sub_edge_vertices[node]) touches = touches || (v >= 0 && on_patch[std::size_t(v)]);
-    return touches;
-  };
-  if (!tree.patch_triangles.empty())
-    for (std::size_t node = 0; node < tree.internal_nodes(); ++node)
-      if (touches_patch(node)) pin(std::int32_t(node));
-  // A crossing the leaves have no vertex for (mc_octree.cpp adds one) marks a
-  // coarse node whose signs see surface the leaves do not have.
+    for (const std::int32_t v : t) pinning[std::size_t(v)] = 1;
   std::int32_t first_centre = std::int32_t(tree.positions.size());
   for (std::int32_t c : tree.centre_vertices)
     if (c >= 0) first_centre = std::min(first_centre, c);
-  auto added = [&](std::int32_t v) { return v >= std::int32_t(tree.mesh_vertices) && v < first_centre; };
-  for (std::size_t node = 0; node < tree.internal_nodes(); ++node) {
-    bool lacking = false;
-    for (std::int32_t v : tree.edge_vertices[node]) lacking = lacking || added(v);
-    for (std::int32_t v : tree.sub_edge_vertices[node]) lacking = lacking || added(v);  // its transitions'
-    if (lacking) pin(std::int32_t(node));
-  }
+  for (std::int32_t v = std::int32_t(tree.mesh_vertices); v < first_centre; ++v) pinning[std::size_t(v)] = 1;
+  auto pinning_vertex = [&](std::int32_t v) { return v >= 0 && pinning[std::size_t(v)]; };
+  for (std::size_t node = 0; node < tree.internal_nodes(); ++node)
+    if (std::any_of(tree.edge_vertices[node].begin(), tree.edge_vertices[node].end(), pinning_vertex) ||
+        std::any_of(tree.sub_edge_vertices[node].begin(), tree.sub_edge_vertices[node].end(), pinning_vertex))
+      pin(std::int32_t(node));
   // Dependencies are coarser, so they sit at smaller indices: one pass from
   // the deepest nodes up closes the set.
   std::int32_t deps[26];
