@@ -9,29 +9,6 @@
 namespace scan2lod {
 namespace {
 
-int cell(int dx, int dy, int dz) { return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1); }
-
-// The cell across each face (axis * 2 + side) of a node.
-const int kFaceCell[6] = {cell(-1, 0, 0), cell(1, 0, 0), cell(0, -1, 0), cell(0, 1, 0), cell(0, 0, -1), cell(0, 0, 1)};
-
-// For each cell around a node (index as in McOctree::neighbours): the node
-// edges (bits 0-11, numbering of cube_table.h) and the face (bits 12-17,
-// axis * 2 + side) that a finer node there splits.
-const auto kSplits = [] {
-  std::array<std::uint32_t, 27> splits{};
-  for (int e = 0; e < 12; ++e) {
-    const int axis = e / 4, u = (axis + 1) % 3, v = (axis + 2) % 3;
-    int du[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
-    du[u] = (e & 1) ? 1 : -1;
-    dv[v] = (e & 2) ? 1 : -1;
-    for (const int c : {cell(du[0], du[1], du[2]), cell(dv[0], dv[1], dv[2]),
-                        cell(du[0] + dv[0], du[1] + dv[1], du[2] + dv[2])})
-      splits[std::size_t(c)] |= 1u << e;
-  }
-  for (int f = 0; f < 6; ++f) splits[std::size_t(kFaceCell[f])] |= 1u << (12 + f);
-  return splits;
-}();
-
 // Marks in extract_lod's scratch: bit 0 expanded, bit 1 in the cut.
 constexpr std::uint8_t kExpanded = 1, kCut = 2;
 constexpr std::uint64_t kCutInEight = 0x0202020202020202ull;  // kCut in each of eight flags
@@ -63,10 +40,11 @@ bool transition_of(const McOctree& tree, std::int32_t node, const std::vector<st
   std::uint32_t splits = 0;
   // Branch-free: whether a cell is empty or expanded is as good as random.
   const std::uint8_t* flags = expanded.data();
+  const auto& splits_by_cell = cell_splits();
   for (const int c : splitting_cells()) {
     const std::int32_t a = around[std::size_t(c)];
     const std::uint32_t fine = flags[std::max(a, 0)] & kExpanded & std::uint8_t(a >= 0);
-    splits |= kSplits[std::size_t(c)] & (0u - fine);
+    splits |= splits_by_cell[std::size_t(c)] & (0u - fine);
   }
   if (!splits) return false;
   const std::uint16_t edges = std::uint16_t(splits & 0xfff);

@@ -356,15 +356,15 @@ void fit_centres(const std::vector<LeafSums>& sums, McOctree* tree) {
 // half-spaces), else points towards the mean of the node's crossings or a
 // loop's mean. Extraction still only reads the centre's index.
 void unfold_centres(McOctree* tree) {
-  std::array<std::uint16_t, 6> face_edges{};  // node edges on face axis * 2 + side
-  for (int e = 0; e < 12; ++e) {
-    const int c = edge_corner(e, 0);
-    for (int axis = 0; axis < 3; ++axis)
-      if (axis != e / 4) face_edges[std::size_t(axis * 2 + ((c >> axis) & 1))] |= std::uint16_t(1u << e);
-  }
-  std::vector<std::pair<std::uint8_t, std::uint16_t>> configurations;
-  for (int f = 0; f < 6; ++f) configurations.push_back({std::uint8_t(1u << f), face_edges[std::size_t(f)]});
-  configurations.push_back({63, 4095});
+  // A finer node across each face alone, then across all six.
+  std::vector<std::uint32_t> configurations;
+  std::uint32_t all_faces = 0;
+  for (const int c : splitting_cells())
+    if (const std::uint32_t splits = cell_splits()[std::size_t(c)]; splits >> 12) {
+      configurations.push_back(splits);
+      all_faces |= splits;
+    }
+  configurations.push_back(all_faces);
 
   struct Side {
     Eigen::Vector3d a, b;  // a loop segment, in loop order
@@ -376,9 +376,8 @@ void unfold_centres(McOctree* tree) {
   {
     std::vector<Side> sides;
     std::vector<Eigen::Vector3d> loop_normals, loop_means;
+    std::vector<int> loop_sizes;
     std::vector<Triangle> fans;
-    std::vector<std::pair<std::int32_t, std::int32_t>> links;  // loop[k + 1] -> loop[k]
-    std::vector<std::uint8_t> used;
 #pragma omp for schedule(dynamic, 256)
     for (std::int64_t node_index = 0; node_index < internal; ++node_index) {
       const std::size_t node = std::size_t(node_index);
@@ -387,36 +386,35 @@ void unfold_centres(McOctree* tree) {
       sides.clear();
       loop_normals.clear();
       loop_means.clear();
-      for (const auto& [faces, edges] : configurations) {
+      loop_sizes.clear();
+      for (const std::uint32_t splits : configurations) {
         fans.clear();
         triangulate_transition({tree->boundary_inside[node], tree->edge_vertices[node].data(),
-                                tree->sub_edge_vertices[node].data(), centre, faces, edges},
+                                tree->sub_edge_vertices[node].data(), centre, std::uint8_t(splits >> 12),
+                                std::uint16_t(splits & 0xfff)},
                                &fans);
-        // Fan triangles are (centre, loop[k + 1], loop[k]): chain them into loops.
-        links.clear();
-        for (const Triangle& t : fans)
-          if (t[0] == centre) links.push_back({t[1], t[2]});
-        std::sort(links.begin(), links.end());
-        used.assign(links.size(), 0);
-        for (std::size_t first = 0; first < links.size(); ++first) {
-          if (used[first]) continue;
-          const int loop = int(loop_normals.size());
-          Eigen::Vector3d normal = Eigen::Vector3d::Zero(), mean = Eigen::Vector3d::Zero();
-          int m = 0;
-          for (std::size_t k = first; k < links.size() && !used[k];) {
-            used[k] = 1;
-            const Eigen::Vector3d a = tree->positions[links[k].first].cast<double>(),
-                                  b = tree->positions[links[k].second].cast<double>();
-            normal += a.cross(b);  // the loop's vector area, whatever the centre
-            mean += a;
-            ++m;
-            sides.push_back({a, b, loop});
-            const auto at = std::lower_bound(links.begin(), links.end(), std::make_pair(links[k].second, std::int32_t(-1)));
-            k = at != links.end() && at->first == links[k].second ? std::size_t(at - links.begin()) : links.size();
+        // A fan's triangles are (centre, loop[k + 1], loop[k]), one after
+        // another: a loop ends where a triangle does not start at the last
+        // one's loop[k + 1].
+        const Triangle* previous = nullptr;
+        for (const Triangle& t : fans) {
+          if (t[0] != centre) continue;
+          if (!previous || t[2] != (*previous)[1]) {
+            loop_normals.push_back(Eigen::Vector3d::Zero());
+            loop_means.push_back(Eigen::Vector3d::Zero());
+            loop_sizes.push_back(0);
           }
-          loop_normals.push_back(normal.normalized());
-          loop_means.push_back(mean / m);
+          previous = &t;
+          const Eigen::Vector3d a = tree->positions[t[1]].cast<double>(), b = tree->positions[t[2]].cast<double>();
+          loop_normals.back() += a.cross(b);  // the loop's vector area, whatever the centre
+          loop_means.back() += a;
+          ++loop_sizes.back();
+          sides.push_back({a, b, int(loop_normals.size()) - 1});
         }
+      }
+      for (std::size_t l = 0; l < loop_normals.size(); ++l) {
+        loop_normals[l].normalize();
+        loop_means[l] /= loop_sizes[l];
       }
       if (sides.empty()) continue;
       auto flips = [&](const Eigen::Vector3d& c) {

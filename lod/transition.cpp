@@ -110,6 +110,30 @@ const std::array<int, 18>& splitting_cells() {
   return cells;
 }
 
+const std::array<std::uint32_t, 27>& cell_splits() {
+  static const auto splits = [] {
+    auto cell = [](int dx, int dy, int dz) { return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1); };
+    std::array<std::uint32_t, 27> found{};
+    for (int e = 0; e < 12; ++e) {
+      const int axis = e / 4, u = (axis + 1) % 3, v = (axis + 2) % 3;
+      int du[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
+      du[u] = (e & 1) ? 1 : -1;
+      dv[v] = (e & 2) ? 1 : -1;
+      for (const int c : {cell(du[0], du[1], du[2]), cell(dv[0], dv[1], dv[2]),
+                          cell(du[0] + dv[0], du[1] + dv[1], du[2] + dv[2])})
+        found[std::size_t(c)] |= 1u << e;
+    }
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side) {
+        int d[3] = {0, 0, 0};
+        d[axis] = side ? 1 : -1;
+        found[std::size_t(cell(d[0], d[1], d[2]))] |= 1u << (12 + axis * 2 + side);
+      }
+    return found;
+  }();
+  return splits;
+}
+
 int lattice_of_corner(int c) { return lattice((c & 1) * 2, ((c >> 1) & 1) * 2, ((c >> 2) & 1) * 2); }
 
 namespace {

@@ -42,6 +42,12 @@ int lattice_of_corner(int c);
 // alone splits nothing.
 const std::array<int, 18>& splitting_cells();
 
+// For each of the 27 cells: what a finer node there refines of the node,
+// bits 0-11 the edges it splits (numbering of cube_table.h) and bits 12-17
+// the face (axis * 2 + side) across it; TransitionInput's split_edges and
+// fine_faces are the union over the finer cells around.
+const std::array<std::uint32_t, 27>& cell_splits();
+
 // Everything a node needs to triangulate itself against finer neighbours.
 struct TransitionInput {
   std::uint32_t inside;                          // bit p: lattice point p is inside
