@@ -1,5 +1,6 @@
 #include "acquisition/virtual_scanner.h"
 
+#include "acquisition/lattice_normals.h"
 #include "acquisition/range_grid_ply.h"
 #include "core/error.h"
 #include "core/progress.h"
@@ -166,6 +167,12 @@ std::vector<VirtualScan> virtual_scan(const TriangleMesh& mesh, const VirtualSca
   }
   progress.finish();
   return scans;
+}
+
+OrientedPoints virtual_scan_points(const TriangleMesh& mesh, const VirtualScanOptions& options) {
+  OrientedPoints points;
+  for (const VirtualScan& scan : virtual_scan(mesh, options)) points.append(range_image_to_points(scan.image, scan.pose));
+  return points;
 }
 
 }  // namespace scan2lod

@@ -48,6 +48,10 @@ using VirtualScan = PlacedScan;  // pose: scan frame -> mesh frame
 // std::invalid_argument when views, width or height is < 1.
 std::vector<VirtualScan> virtual_scan(const TriangleMesh& mesh, const VirtualScanOptions& options);
 
+// The oriented points of every view of virtual_scan(mesh, options), as
+// range_image_to_points makes them of real scans, in one cloud.
+OrientedPoints virtual_scan_points(const TriangleMesh& mesh, const VirtualScanOptions& options);
+
 // Virtual scans are written with write_scan_set (acquisition/scan_set.h):
 // DIR/scan_000.ply, ... and DIR/scans.conf.
 

@@ -2,7 +2,6 @@
 // meshes, and their virtual range scans as oriented points.
 #pragma once
 
-#include "acquisition/lattice_normals.h"
 #include "acquisition/virtual_scanner.h"
 #include "core/types.h"
 
@@ -19,12 +18,7 @@ inline TriangleMesh from_open3d(const open3d::geometry::TriangleMesh& m) {
 
 // The mesh scanned from `views` directions at size x size, as oriented points.
 inline OrientedPoints scan_shape(const TriangleMesh& mesh, int views = 14, int size = 256) {
-  VirtualScanOptions options;
-  options.views = views;
-  options.width = options.height = size;
-  OrientedPoints points;
-  for (const VirtualScan& s : virtual_scan(mesh, options)) points.append(range_image_to_points(s.image, s.pose));
-  return points;
+  return virtual_scan_points(mesh, {views, size, size});
 }
 
 }  // namespace scan2lod::testing

@@ -113,16 +113,6 @@ TriangleMesh make_shape(const std::string& shape, double gap_cells, int resoluti
   throw std::invalid_argument("unknown shape '" + shape + "'");
 }
 
-// The points the virtual scanner's range images give, as real scans would.
-OrientedPoints virtual_scan_points(const TriangleMesh& mesh, int views, int size) {
-  VirtualScanOptions options;
-  options.views = views;
-  options.width = options.height = size;
-  OrientedPoints points;
-  for (const VirtualScan& scan : virtual_scan(mesh, options)) points.append(range_image_to_points(scan.image, scan.pose));
-  return points;
-}
-
 // The scans of `conf` named in `stems` (file names without .ply), in the
 // .conf's order and each with its pose: what load_oriented_points makes of a
 // .conf holding only those lines, without writing one.
@@ -530,9 +520,9 @@ int main(int argc, char** argv) {
     const auto start = Clock::now();
     OrientedPoints points;
     if (!shape.empty()) {
-      points = virtual_scan_points(make_shape(shape, gap_cells, resolution), views, size);
+      points = virtual_scan_points(make_shape(shape, gap_cells, resolution), {views, size, size});
     } else if (!scan_mesh.empty()) {
-      points = virtual_scan_points(read_mesh((bunny / scan_mesh).string()), views, size);
+      points = virtual_scan_points(read_mesh((bunny / scan_mesh).string()), {views, size, size});
     } else if (!scans.empty()) {
       points = conf_subset_points(bunny / "data" / "bun.conf", scans);
     } else if (!inputs.empty()) {
