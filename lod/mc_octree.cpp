@@ -105,30 +105,37 @@ class LatticeSigns {
   static constexpr int kBrickShift = 4;  // 16^3 points a brick
   static constexpr std::size_t kWordsPerBitset = std::size_t(1) << (3 * kBrickShift - 6);
 
-  // The brick's first word (known bits, then inside bits) and the bit in it.
-  std::pair<std::size_t, std::uint64_t> locate(std::uint64_t key, bool create) {
+  // Where a key's bits are: its brick's slot in the directory, and the word
+  // (within the brick's known bits; its inside bits follow them) and bit.
+  struct Spot {
+    std::size_t brick, word;
+    std::uint64_t mask;
+  };
+  Spot spot(std::uint64_t key) const {
     int x, y, z;
     unpack_key(key, &x, &y, &z);
-    const std::size_t b = std::size_t(x >> kBrickShift) + std::size_t(side_) * (std::size_t(y >> kBrickShift) +
-                                                                             std::size_t(side_) * std::size_t(z >> kBrickShift));
-    if (directory_[b] < 0) {
-      if (!create) return {std::size_t(-1), 0};
-      directory_[b] = std::int32_t(bits_.size() / (2 * kWordsPerBitset));
-      bits_.resize(bits_.size() + 2 * kWordsPerBitset, 0);
-    }
     constexpr int mask = (1 << kBrickShift) - 1;
     const std::size_t local = std::size_t(x & mask) + (std::size_t(y & mask) << kBrickShift) +
                               (std::size_t(z & mask) << (2 * kBrickShift));
-    return {std::size_t(directory_[b]) * 2 * kWordsPerBitset + (local >> 6), std::uint64_t(1) << (local & 63)};
+    return {std::size_t(x >> kBrickShift) +
+                std::size_t(side_) * (std::size_t(y >> kBrickShift) + std::size_t(side_) * std::size_t(z >> kBrickShift)),
+            local >> 6, std::uint64_t(1) << (local & 63)};
   }
   bool bit(std::uint64_t key, std::size_t offset) const {
-    const auto [word, mask] = const_cast<LatticeSigns*>(this)->locate(key, false);
-    return word != std::size_t(-1) && (bits_[word + offset] & mask);
+    const Spot s = spot(key);
+    const std::int32_t b = directory_[s.brick];
+    return b >= 0 && (bits_[std::size_t(b) * 2 * kWordsPerBitset + s.word + offset] & s.mask);
   }
   void set(std::uint64_t key, bool in) {
-    const auto [word, mask] = locate(key, true);
-    bits_[word] |= mask;
-    if (in) bits_[word + kWordsPerBitset] |= mask;
+    const Spot s = spot(key);
+    std::int32_t& b = directory_[s.brick];
+    if (b < 0) {
+      b = std::int32_t(bits_.size() / (2 * kWordsPerBitset));
+      bits_.resize(bits_.size() + 2 * kWordsPerBitset, 0);
+    }
+    const std::size_t word = std::size_t(b) * 2 * kWordsPerBitset + s.word;
+    bits_[word] |= s.mask;
+    if (in) bits_[word + kWordsPerBitset] |= s.mask;
   }
   void store(std::uint64_t key, float d) {
     value_index_.assign(key, std::int32_t(values_.size()));
