@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 machine:
-#   scripts/build.sh demo   install what is missing, build, reconstruct the bundled bunny
+#   scripts/build.sh demo   install what is missing, build, reconstruct the bundled bunny,
+#                           build its LOD model and extract a level
 #   scripts/build.sh test   the same, then run the test suite
 #   scripts/build.sh deps   only install the packages
 # BUILD_DIR (default build) and JOBS (default nproc) can be set in the environment.
@@ -50,6 +51,10 @@ demo() {
   if [ -f "$reference" ]; then
     "$build_dir/bin/scan2lod" compare out/bunny.ply "$reference"
   fi
+  # The main job: the LOD model, its levels, and one level taken from it.
+  "$build_dir/bin/scan2lod" build data/bunny/bun.conf -o out/bunny.mco --resolution 256
+  "$build_dir/bin/scan2lod" info out/bunny.mco
+  "$build_dir/bin/scan2lod" extract out/bunny.mco --percent 20 -o out/bunny_20.ply
 }
 
 run_tests() {
