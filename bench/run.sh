@@ -19,15 +19,9 @@
 #   bench/run.sh --build build-bench --write --pcl-256  # adds PCL MC at R=256 (5-9 min more)
 set -euo pipefail
 
-# libgomp spins at barriers by default. On a shared 2-core machine another
-# process then slows OpenMP code several-fold (Open3D's Poisson at depth 8:
-# 5 s -> 42 s beside one compile), so the times would measure the neighbours.
-# Passive waiting keeps them about the work; the report says which policy ran.
-# OMP_WAIT_POLICY=active bench/run.sh ... measures libgomp's default instead.
-export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
-
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 repo="$(dirname "$here")"
+source "$repo/bench/common.sh"
 build="${SCAN2LOD_BUILD_DIR:-$repo/build}"
 write=0
 args=()
@@ -39,13 +33,7 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 
-binary="$build/bin/scan2lod_bench_reconstruct"
-if [[ ! -x "$binary" ]]; then
-  echo "run.sh: no benchmark binary at $binary" >&2
-  echo "  build it first: cmake -S $repo -B $build -DCMAKE_BUILD_TYPE=Release &&" \
-       "make -C $build scan2lod_bench_reconstruct" >&2
-  exit 1
-fi
+bench_binary run.sh "$build" scan2lod_bench_reconstruct
 
 if [[ $write -eq 1 ]]; then
   # Through a temporary file, so a failed or interrupted run keeps the old report.

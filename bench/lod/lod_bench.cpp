@@ -87,6 +87,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <string>
@@ -626,15 +627,21 @@ void report_peers(Report& r, const std::vector<Level>& levels, double timeout) {
   }
 }
 
+// The header of a right-aligned table: `first` columns, then one per peer.
+void peer_columns(Report& r, std::initializer_list<const char*> first, const std::vector<Peer>& peers) {
+  std::string names = "|", rule = "|";
+  for (const char* column : first) names += std::string(" ") + column + " |";
+  for (const Peer& p : peers) names += " " + p.name + " |";
+  for (std::size_t i = 0; i < first.size() + peers.size(); ++i) rule += "---:|";
+  r.add("%s\n%s\n", names.c_str(), rule.c_str());
+}
+
 // Error and time of every method at every level in two compact tables.
 void report_matrices(Report& r, const std::vector<Level>& levels, const std::vector<Peer>& peers) {
   r.add("## At a glance\n\n");
   r.add("Error, two-sided mean to the full mesh in 1e-3 of its diagonal (a peer's achieved triangle count "
-        "in brackets where it is more than 1 %% off scan2lod's):\n\n| level | triangles | scan2lod |");
-  for (const Peer& p : peers) r.add(" %s |", p.name.c_str());
-  r.add("\n|---:|---:|---:|");
-  for (std::size_t i = 0; i < peers.size(); ++i) r.add("---:|");
-  r.add("\n");
+        "in brackets where it is more than 1 %% off scan2lod's):\n\n");
+  peer_columns(r, {"level", "triangles", "scan2lod"}, peers);
   for (const Level& l : levels) {
     if (l.peers.empty()) continue;
     r.add("| %s | %lld | **%s** |", percent_label(l).c_str(), (long long)l.triangles,
@@ -647,12 +654,8 @@ void report_matrices(Report& r, const std::vector<Level>& levels, const std::vec
     }
     r.add("\n");
   }
-  r.add("\nSeconds (scan2lod: `extract_lod` alone; peers: the simplification call, median):\n\n"
-        "| level | scan2lod |");
-  for (const Peer& p : peers) r.add(" %s |", p.name.c_str());
-  r.add("\n|---:|---:|");
-  for (std::size_t i = 0; i < peers.size(); ++i) r.add("---:|");
-  r.add("\n");
+  r.add("\nSeconds (scan2lod: `extract_lod` alone; peers: the simplification call, median):\n\n");
+  peer_columns(r, {"level", "scan2lod"}, peers);
   for (const Level& l : levels) {
     if (l.peers.empty()) continue;
     r.add("| %s | **%s** |", percent_label(l).c_str(),

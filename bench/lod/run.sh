@@ -16,12 +16,9 @@
 #   bench/lod/run.sh --build build-lod --write    # R=256, 7 levels (see REPORT.md for the time)
 set -euo pipefail
 
-# As in bench/run.sh: libgomp's spinning waits make OpenMP code (reconstruct,
-# the octree's field) measure the neighbours on a shared 2-core machine.
-export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
-
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 repo="$(dirname "$(dirname "$here")")"
+source "$repo/bench/common.sh"
 build="${SCAN2LOD_BUILD_DIR:-$repo/build}"
 args=()
 while [[ $# -gt 0 ]]; do
@@ -31,11 +28,5 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 
-binary="$build/bin/scan2lod_bench_lod"
-if [[ ! -x "$binary" ]]; then
-  echo "run.sh: no benchmark binary at $binary" >&2
-  echo "  build it first: cmake -S $repo -B $build -DCMAKE_BUILD_TYPE=Release &&" \
-       "make -C $build scan2lod_bench_lod" >&2
-  exit 1
-fi
+bench_binary run.sh "$build" scan2lod_bench_lod
 exec "$binary" "${args[@]}"

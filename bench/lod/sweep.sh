@@ -18,11 +18,9 @@
 #   bench/lod/sweep.sh --build build --write        # all 74 cases, ~1.5 min on 2 cores
 set -euo pipefail
 
-# As in bench/lod/run.sh: libgomp's spinning waits slow OpenMP code on a shared machine.
-export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
-
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 repo="$(dirname "$(dirname "$here")")"
+source "$repo/bench/common.sh"
 build="${SCAN2LOD_BUILD_DIR:-$repo/build}"
 command="bench/lod/sweep.sh $*"
 write=0 quick=0 only="" logs="" shared=()
@@ -38,13 +36,7 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 
-binary="$build/bin/scan2lod_bench_sweep"
-if [[ ! -x "$binary" ]]; then
-  echo "sweep.sh: no sweep binary at $binary" >&2
-  echo "  build it first: cmake -S $repo -B $build -DCMAKE_BUILD_TYPE=Release &&" \
-       "make -C $build scan2lod_bench_sweep" >&2
-  exit 1
-fi
+bench_binary sweep.sh "$build" scan2lod_bench_sweep
 
 # "name R options": shapes with a known answer carry their components and χ;
 # paths are relative to <shared>/data/bunny.
