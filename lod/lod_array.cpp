@@ -95,6 +95,81 @@ struct Key {
   }
 };
 
+// Triangles after each of the expansions [begin, end) of lod.order, into
+// accumulated[begin + 1 ..= end]; accumulated[begin] too when begin is 0.
+// It follows the extracted meshes exactly: an expansion replaces the node's
+// triangles by its children's and re-triangulates the cut nodes across a face
+// or an edge, whose transitions change (a finer node across a corner alone
+// splits nothing, lod/transition.h); those are recounted in one batch. Hole
+// patches show once all the nodes around their rims have expanded.
+void accumulate(const McOctree& tree, const LodArray& lod, std::size_t begin, std::size_t end,
+                std::int64_t* accumulated) {
+  const std::size_t n = tree.size();
+  std::vector<std::uint8_t> flags(n, 0);  // extract.h's marks: bit 0 expanded
+  std::vector<std::int32_t> current(n, 0);  // triangles each cut node emits now
+  mark_cut(tree, lod, begin, flags.data());
+  std::int64_t triangles = 0;
+  // The cut at `begin`, counted in batches.
+  std::vector<std::int32_t> cut;
+  for (std::size_t node = 0; node < n; ++node)
+    if (flags[node] && !(flags[node] & 1)) cut.push_back(std::int32_t(node));
+  std::vector<std::int32_t> counts(cut.size());
+  node_triangle_counts(tree, cut.data(), int(cut.size()), flags, counts.data());
+  for (std::size_t i = 0; i < cut.size(); ++i) triangles += current[cut[i]] = counts[i];
+  std::vector<std::int32_t> patch_waiting(tree.patch_groups(), 0);
+  std::vector<std::vector<std::int32_t>> patches_of(n);
+  for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
+    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
+      if (!(flags[tree.patch_needs[k]] & 1)) {
+        ++patch_waiting[g];
+        patches_of[tree.patch_needs[k]].push_back(std::int32_t(g));
+      }
+    if (patch_waiting[g] == 0) triangles += tree.patch_group_first[g + 1] - tree.patch_group_first[g];
+  }
+  if (begin == 0) accumulated[0] = triangles;
+  std::int32_t recount[8 + 18], batch[8 + 18];
+  for (std::size_t i = begin; i < end; ++i) {
+    const std::int32_t node = lod.order[i];
+    flags[node] = 1;
+    triangles -= current[node];
+    int size = 0;
+    for (int c = 0; c < tree.child_counts[node]; ++c) recount[size++] = tree.first_child[node] + c;
+    if (std::size_t(node) < tree.internal_nodes())
+      for (const int c : splitting_cells())
+        if (const std::int32_t q = tree.neighbours[node][std::size_t(c)];
+            q >= 0 && !(flags[q] & 1) && (flags[tree.parents[q]] & 1))
+          recount[size++] = q;
+    node_triangle_counts(tree, recount, size, flags, batch);
+    for (int k = 0; k < size; ++k) {
+      triangles += batch[k] - current[recount[k]];
+      current[recount[k]] = batch[k];
+    }
+    for (std::int32_t g : patches_of[node])
+      if (--patch_waiting[g] == 0) triangles += tree.patch_group_first[g + 1] - tree.patch_group_first[g];
+    accumulated[i + 1] = triangles;
+  }
+}
+
+// The accumulation table of lod.order. The order does not depend on it, so
+// it is counted afterwards, in two halves at once: the second half starts
+// from the cut at its first expansion, counted whole.
+std::vector<std::int64_t> accumulation_table(const McOctree& tree, const LodArray& lod) {
+  const std::size_t full = lod.order.size(), half = full / 2;
+  std::vector<std::int64_t> accumulated(full + 1, 0);
+  if (full < 4096) {
+    accumulate(tree, lod, 0, full, accumulated.data());
+    return accumulated;
+  }
+#pragma omp parallel sections num_threads(2)
+  {
+#pragma omp section
+    accumulate(tree, lod, 0, half, accumulated.data());
+#pragma omp section
+    accumulate(tree, lod, half, full, accumulated.data());
+  }
+  return accumulated;
+}
+
 }  // namespace
 
 LodArray number_nodes(const McOctree& tree) {
@@ -167,50 +242,17 @@ LodArray number_nodes(const McOctree& tree) {
       if (--blocking[waiters[std::size_t(w)].first] == 0) queue.push(priority(waiters[std::size_t(w)].first));
   };
 
-  // The accumulation table follows the extracted meshes exactly: expanding a
-  // node replaces its triangles by its children's and re-triangulates the
-  // nodes of the cut beside it, whose transitions change.
-  std::vector<std::int32_t> current(n, 0);  // triangles each cut node emits now
-  // Hole patches show once all the nodes around their rims have expanded.
-  std::vector<std::int32_t> patch_waiting(tree.patch_groups());
-  std::vector<std::vector<std::int32_t>> patches_of(n);
-  for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
-    patch_waiting[g] = tree.patch_needs_first[g + 1] - tree.patch_needs_first[g];
-    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
-      patches_of[tree.patch_needs[k]].push_back(std::int32_t(g));
-  }
   LodArray lod;
   lod.order.reserve(n);
   enter_cut(0);
-  std::int64_t triangles = current[0] = tree.triangle_counts[0];
-  lod.accumulated.push_back(triangles);
-  // What an expansion recounts: its children, and the cut nodes across a
-  // face or an edge, which re-triangulate (a finer node across a corner alone
-  // splits nothing, lod/transition.h); counted in one batch.
-  std::int32_t recount[8 + 18], counts[8 + 18];
   while (!queue.empty()) {
     const std::int32_t node = queue.top().node;
     queue.pop();
     lod.order.push_back(node);
     expand(node);
-    triangles -= current[node];
-    int size = 0;
-    for (int c = 0; c < tree.child_counts[node]; ++c) recount[size++] = tree.first_child[node] + c;
-    if (std::size_t(node) < tree.internal_nodes())
-      for (const int c : splitting_cells())
-        if (const std::int32_t q = tree.neighbours[node][std::size_t(c)];
-            q >= 0 && !expanded[q] && expanded[tree.parents[q]])
-          recount[size++] = q;
-    node_triangle_counts(tree, recount, size, expanded, counts);
-    for (int i = 0; i < size; ++i) {
-      triangles += counts[i] - current[recount[i]];
-      current[recount[i]] = counts[i];
-    }
     for (int c = 0; c < tree.child_counts[node]; ++c) enter_cut(tree.first_child[node] + c);
-    for (std::int32_t g : patches_of[node])
-      if (--patch_waiting[g] == 0) triangles += tree.patch_group_first[g + 1] - tree.patch_group_first[g];
-    lod.accumulated.push_back(triangles);
   }
+  lod.accumulated = accumulation_table(tree, lod);
   // The closure makes every pinned node expandable before any other.
   while (lod.pinned < lod.order.size() && pinned[lod.order[lod.pinned]]) ++lod.pinned;
   return lod;
