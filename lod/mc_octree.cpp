@@ -1003,16 +1003,12 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
 }
 
 McOctree build_mc_octree(const Reconstruction& reconstruction, const OctreeOptions& options) {
-  // The field's setup and its first query, which builds Open3D's BVH, take a
-  // quarter of a second at R = 256: on a second thread they overlap the
-  // octree's skeleton, which needs no field.
+  // The field's setup, which builds Open3D's BVH, takes a quarter of a
+  // second at R = 256: on a second thread it overlaps the octree's skeleton,
+  // which needs no field.
   const TriangleMesh& mesh = reconstruction.mesh;
-  std::shared_future<SignedDistanceField> ready = std::async(std::launch::async, [&mesh] {
-                                                    SignedDistanceField field = mesh_distance_field(mesh);
-                                                    std::vector<float> d;
-                                                    if (!mesh.positions.empty()) field({mesh.positions.front()}, &d);
-                                                    return field;
-                                                  }).share();
+  std::shared_future<SignedDistanceField> ready =
+      std::async(std::launch::async, [&mesh] { return mesh_distance_field(mesh); }).share();
   const SignedDistanceField field = [ready](const std::vector<Vec3f>& q, std::vector<float>* d) { ready.get()(q, d); };
   return build_mc_octree(reconstruction.leaves, mesh, field, options);
 }

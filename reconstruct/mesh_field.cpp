@@ -11,7 +11,9 @@
 #include <open3d/t/geometry/RaycastingScene.h>
 
 #include <cstring>
+#include <exception>
 #include <memory>
+#include <thread>
 
 namespace scan2lod {
 
@@ -59,19 +61,19 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
     for (int k = 0; k < 3; ++k) idx[3 * t + k] = std::uint32_t(state->triangles[t][k]);
   state->scene.AddTriangles(vertices, indices);
 
-  return [state](const std::vector<Vec3f>& q, std::vector<float>* d) {
-    d->assign(q.size(), 0.f);
-    if (q.empty()) return;
-    o3c::Tensor query = o3c::Tensor::Empty({std::int64_t(q.size()), 3}, o3c::Float32);
-    std::memcpy(query.GetDataPtr<float>(), q.data(), q.size() * sizeof(Vec3f));
-    auto result = state->scene.ComputeClosestPoints(query);
+  // Distances of q[begin, end) into d[begin, end).
+  auto query = [state](const std::vector<Vec3f>& q, std::size_t begin, std::size_t end, std::vector<float>* d) {
+    const std::int64_t count = std::int64_t(end - begin);
+    o3c::Tensor points_in = o3c::Tensor::Empty({count, 3}, o3c::Float32);
+    std::memcpy(points_in.GetDataPtr<float>(), q.data() + begin, std::size_t(count) * sizeof(Vec3f));
+    auto result = state->scene.ComputeClosestPoints(points_in);
     const float* points = result.at("points").GetDataPtr<float>();
     const auto* prim = result.at("primitive_ids").GetDataPtr<std::uint32_t>();
     const float* uv = result.at("primitive_uvs").GetDataPtr<float>();
     // One thread: Open3D ran the query on TBB's workers, and an OpenMP team
     // here kept both cores spinning against them, 5-8 ms per call whatever
     // its size (the octree makes dozens of small calls).
-    for (std::int64_t i = 0; i < std::int64_t(q.size()); ++i) {
+    for (std::int64_t i = 0; i < count; ++i) {
       const Vec3f c(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
       const std::uint32_t t = prim[i];
       const Triangle& tri = state->triangles[t];
@@ -88,9 +90,36 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
         const int opposite = w[0] < kOnFeature ? 0 : w[1] < kOnFeature ? 1 : 2;
         n = state->edge_normals[state->triangle_edges[t][(opposite + 1) % 3]];
       }
-      const Vec3f offset = q[std::size_t(i)] - c;
-      (*d)[std::size_t(i)] = offset.dot(n) < 0.f ? -offset.norm() : offset.norm();
+      const Vec3f offset = q[begin + std::size_t(i)] - c;
+      (*d)[begin + std::size_t(i)] = offset.dot(n) < 0.f ? -offset.norm() : offset.norm();
     }
+  };
+  // Open3D commits the scene (builds its BVH) on the first query, unguarded:
+  // done here, before any caller can query from two threads.
+  {
+    std::vector<float> d(1);
+    query({mesh.positions[state->triangles.front()[0]]}, 0, 1, &d);
+  }
+  return [query](const std::vector<Vec3f>& q, std::vector<float>* d) {
+    d->assign(q.size(), 0.f);
+    if (q.empty()) return;
+    // Open3D splits a query into TBB tasks of 1024 points, so a smaller one
+    // runs on one core; points far from the mesh take tens of microseconds
+    // each (the octree's coarse corners), so such calls go out in two halves.
+    constexpr std::size_t kTask = 1024, kWorthSplitting = 32;
+    if (q.size() < kWorthSplitting || q.size() > kTask) return query(q, 0, q.size(), d);
+    const std::size_t half = q.size() / 2;
+    std::exception_ptr failed;
+    std::thread first([&] {
+      try {
+        query(q, 0, half, d);
+      } catch (...) {
+        failed = std::current_exception();
+      }
+    });
+    query(q, half, q.size(), d);
+    first.join();
+    if (failed) std::rethrow_exception(failed);
   };
 }
 
