@@ -9,7 +9,7 @@ const ReconstructOptions& ReconstructFlags::resolve() {
 
 void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {
   ReconstructOptions& o = flags->options;
-  cmd->add_option("-r,--resolution", o.resolution, "Cubes per side (power of two)")->capture_default_str();
+  cmd->add_option("-r,--resolution", o.resolution, "Cubes per side (a power of two, 16 or more)")->capture_default_str();
   cmd->add_option("--margin", o.margin, "Cubes grown around point-holding cubes before surface following")
       ->capture_default_str();
   cmd->add_option("--distance", flags->method, "Signed distance: planes, hoppe or seed")->capture_default_str();

@@ -5,10 +5,9 @@
 namespace scan2lod {
 
 CubeGrid make_cube_grid(const Aabb& box, int resolution) {
-  if (resolution < 4 || resolution > kMaxResolution || (resolution & (resolution - 1)) != 0)
-    throw InputError("", "resolution must be a power of two from 4 to " +
-                             std::to_string(kMaxResolution) + ", got " +
-                             std::to_string(resolution));
+  if (resolution < kMinResolution || resolution > kMaxResolution || (resolution & (resolution - 1)) != 0)
+    throw InputError("", "resolution must be a power of two from " + std::to_string(kMinResolution) + " to " +
+                             std::to_string(kMaxResolution) + ", got " + std::to_string(resolution));
   if (box.empty() || !box.min.allFinite() || !box.max.allFinite())
     throw InputError("", "the input points have no finite bounding box");
   const double extent = box.extent().cast<double>().maxCoeff();

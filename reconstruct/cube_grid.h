@@ -8,7 +8,10 @@
 
 namespace scan2lod {
 
-// Grid coordinates are packed 20 bits per axis, so R may be up to 2^19.
+// Grid coordinates are packed 20 bits per axis, so R may be up to 2^19. Eight
+// of the R cubes are padding (make_cube_grid), so R = 16 is the coarsest grid
+// with room for the data.
+constexpr int kMinResolution = 16;
 constexpr int kMaxResolution = 1 << 19;
 
 struct CubeGrid {
@@ -33,7 +36,7 @@ inline void unpack_key(std::uint64_t key, int* x, int* y, int* z) {
 // The grid of `resolution` cubes per side whose cube is the box's bounding cube,
 // centred, with four cubes of padding on every side so that the surface never
 // touches the grid's border. Throws InputError for an empty/degenerate box or a
-// resolution that is not a power of two in [4, kMaxResolution].
+// resolution that is not a power of two in [kMinResolution, kMaxResolution].
 CubeGrid make_cube_grid(const Aabb& box, int resolution);
 
 }  // namespace scan2lod

@@ -64,6 +64,8 @@ TEST(Cli, BadInputsFailCleanlyAndWriteNothing) {
       {(dir / "absent.ply").string(), "absent.ply"},
       {kScans + " --resolution 100", "power of two"},
       {kScans + " --resolution 0", "power of two"},
+      // Below 16 the grid's 8 cubes of padding leave no room (R = 8 divided by zero).
+      {kScans + " --resolution 8", "power of two from 16"},
       {kScans + " --distance magic", "distance method"},
   };
   for (const Case& c : cases) {
