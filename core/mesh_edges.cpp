@@ -14,7 +14,7 @@ MeshEdges mesh_edges(const std::vector<Triangle>& triangles, std::size_t vertex_
     std::int32_t other;  // the larger vertex
     std::int32_t side;   // triangle * 3 + k
   };
-  std::vector<Side> sides(std::size_t(first[vertex_count]));
+  std::vector<Side> sides(static_cast<std::size_t>(first[vertex_count]));  // not size_t(...): clang reads that as a declaration
   std::vector<std::int32_t> fill(first.begin(), first.end() - 1);
   for (std::size_t t = 0; t < triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
