@@ -51,6 +51,7 @@ void add_build_command(CLI::App& app) {
 
     auto stage = clock::now();
     Reconstruction r = reconstruct(points, options);
+    require_surface(args->inputs, r, options.resolution);
     const double reconstruct_seconds = since(stage);
 
     stage = clock::now();

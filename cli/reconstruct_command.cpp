@@ -36,6 +36,7 @@ void add_reconstruct_command(CLI::App& app) {
     OrientedPoints points = load_oriented_points(args->inputs, acquisition);
     const double read_seconds = std::chrono::duration<double>(clock::now() - start).count();
     Reconstruction r = reconstruct(points, options);
+    require_surface(args->inputs, r, options.resolution);
     const auto write_start = clock::now();
     write_mesh(args->output, r.mesh);
     if (args->verbose) {

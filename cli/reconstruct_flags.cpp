@@ -1,5 +1,7 @@
 #include "cli/reconstruct_flags.h"
 
+#include "core/error.h"
+
 namespace scan2lod::cli {
 
 const ReconstructOptions& ReconstructFlags::resolve() {
@@ -29,6 +31,16 @@ void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {
   cmd->add_option("--hole-rounds", o.hole_rounds, "Rings of cubes a small hole is closed by from each side, at most")
       ->capture_default_str();
   cmd->add_option("-j,--threads", o.threads, "Threads (0: all cores)")->capture_default_str();
+}
+
+void require_surface(const std::vector<std::string>& inputs, const Reconstruction& r, int resolution) {
+  if (!r.mesh.triangles.empty()) return;
+  std::string names;
+  for (const std::string& input : inputs) names += (names.empty() ? "" : ", ") + input;
+  throw InputError(names, "no surface at resolution " + std::to_string(resolution) + ": " +
+                              std::to_string(r.stats.points) + " points, " + std::to_string(r.stats.cubes_touched) +
+                              " cubes near them, none crossed by the surface (too few or too sparse points for "
+                              "this resolution: try a coarser --resolution)");
 }
 
 }  // namespace scan2lod::cli

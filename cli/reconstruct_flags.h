@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include <string>
+#include <vector>
 
 namespace scan2lod::cli {
 
@@ -22,5 +23,9 @@ struct ReconstructFlags {
 // --reach, --min-piece, --max-hole, --hole-rounds and -j/--threads to `cmd`,
 // with the options' defaults shown in --help. `flags` must outlive parsing.
 void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags);
+
+// Throws InputError naming the inputs when the reconstruction found no
+// surface, rather than writing an empty mesh or model.
+void require_surface(const std::vector<std::string>& inputs, const Reconstruction& r, int resolution);
 
 }  // namespace scan2lod::cli

@@ -53,6 +53,7 @@ TEST(Cli, BadInputsFailCleanlyAndWriteNothing) {
   std::ofstream(dir / "missing.conf") << "bmesh nowhere.ply 0 0 0 0 0 0 1\n";
   std::ofstream(dir / "flat.off") << "OFF\n3 1 0\n0 0 0\n0 0 0\n0 0 0\n3 0 1 2\n";
   std::ofstream(dir / "nan.off") << "OFF\n3 1 0\n0 0 0\nnan 1 0\n0 1 0\n3 0 1 2\n";
+  std::ofstream(dir / "sparse.off") << "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
   struct Case {
     std::string args, expect;
   };
@@ -62,6 +63,7 @@ TEST(Cli, BadInputsFailCleanlyAndWriteNothing) {
       {(dir / "nan.off").string(), "nan.off"},
       {(dir / "flat.off").string(), "flat.off"},
       {(dir / "absent.ply").string(), "absent.ply"},
+      {(dir / "sparse.off").string() + " -r 64", "no surface at resolution 64"},
       {kScans + " --resolution 100", "power of two"},
       {kScans + " --resolution 0", "power of two"},
       // Below 16 the grid's 8 cubes of padding leave no room (R = 8 divided by zero).
@@ -75,13 +77,13 @@ TEST(Cli, BadInputsFailCleanlyAndWriteNothing) {
     EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << ": " << r.output;
     EXPECT_EQ(r.output.find("Segmentation"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out)) << c.args;
-    EXPECT_TRUE(folder_has_only(dir, 4)) << "a temporary file was left behind by " << c.args;
+    EXPECT_TRUE(folder_has_only(dir, 5)) << "a temporary file was left behind by " << c.args;
   }
   // An output format nobody can write is refused before any work is lost.
   CliRun r = run_cli("reconstruct " + kScans + " -o " + (dir / "out.xyz").string() + " -r 16 -q");
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find(".xyz"), std::string::npos) << r.output;
-  EXPECT_TRUE(folder_has_only(dir, 4));
+  EXPECT_TRUE(folder_has_only(dir, 5));
 }
 
 TEST(Cli, ConvertWritesABinaryScanSet) {
