@@ -415,9 +415,46 @@ struct Level {
   std::optional<SurfaceComparison> fidelity;
   std::string measure_error;
   std::vector<PeerCase> peers;  // empty at 100 %
+  // The same octree cut without crack patching, at about the same count
+  // (open_cut): what the error would be if transitions cost nothing.
+  std::size_t open_priority = 0;
+  std::int64_t open_triangles = 0;
+  std::optional<SurfaceComparison> open_fidelity;
 
   double extract_seconds() const { return extraction.values[0]; }
 };
+
+// The first cut of the LOD array whose nodes' own triangles (no transitions,
+// so cracks stay open: the seed's mesh before its projection) number at least
+// `target`, with the hole patches extract_lod would show there.
+TriangleMesh open_cut(const LodModel& model, std::int64_t target, std::size_t* priority) {
+  const McOctree& tree = model.tree;
+  std::int64_t count = tree.triangle_counts[0];
+  std::size_t p = 0;
+  for (; p < model.lod.full() && count < target; ++p) {
+    const std::int32_t node = model.lod.order[p];
+    count -= tree.triangle_counts[node];
+    for (int c = 0; c < tree.child_counts[node]; ++c) count += tree.triangle_counts[tree.first_child[node] + c];
+  }
+  std::vector<std::uint8_t> flags(tree.size(), 0);
+  mark_cut(tree, model.lod, p, flags.data());
+  std::vector<Triangle> triangles;
+  for (std::size_t n = 0; n < tree.size(); ++n)
+    if (flags[n] == 2) {
+      const Triangle* own = tree.triangles.data() + tree.first_triangle[n];
+      triangles.insert(triangles.end(), own, own + tree.triangle_counts[n]);
+    }
+  for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
+    bool shown = true;
+    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
+      shown = shown && flags[tree.patch_needs[k]] == 1;
+    if (shown)
+      triangles.insert(triangles.end(), tree.patch_triangles.begin() + tree.patch_group_first[g],
+                       tree.patch_triangles.begin() + tree.patch_group_first[g + 1]);
+  }
+  *priority = p;
+  return compact_lod(tree, triangles);
+}
 
 // extract_lod at `priority`, repeated at least `reps` times and for at least
 // 0.25 s, scratch reused. Values: extract median, min, max; extract +
@@ -636,6 +673,35 @@ void peer_columns(Report& r, std::initializer_list<const char*> first, const std
   r.add("%s\n%s\n", names.c_str(), rule.c_str());
 }
 
+// Where scan2lod's error comes from: its level against the same octree cut
+// with no crack patching, and against the best edge-collapse peer.
+void report_open_cut(Report& r, const std::vector<Level>& levels) {
+  r.add("## Where the error comes from\n\n"
+        "The same LOD array's cut with every node emitting its own marching-cubes triangles and no "
+        "transitions (cracks left open, as in the seed before its projection), taken at the first priority "
+        "where it has at least the level's triangles. If it is about as far from the full mesh as the "
+        "level, crack patching costs no accuracy at equal size, and the gap to edge collapse is the cut's "
+        "own: marching cubes on octree cells, with vertices on the cells' edges.\n\n"
+        "| level | triangles | scan2lod | open cut: priority, triangles | open cut error | best edge collapse "
+        "| scan2lod / best | open cut / best |\n|---:|---:|---:|---:|---:|---|---:|---:|\n");
+  for (const Level& l : levels) {
+    if (!l.open_fidelity || !l.fidelity) continue;
+    double best = 0;
+    std::string best_name;
+    for (const PeerCase& c : l.peers) {
+      if (!c.peer || c.peer->clustering || !c.fidelity) continue;
+      const double e = error_1e3(*c.fidelity);
+      if (best_name.empty() || e < best) best = e, best_name = c.peer->name;
+    }
+    const double own = error_1e3(*l.fidelity), open = error_1e3(*l.open_fidelity);
+    r.add("| %s | %lld | %s | %zu, %lld | %s | %s | %s | %s |\n", percent_label(l).c_str(), (long long)l.triangles,
+          error_text(own).c_str(), l.open_priority, (long long)l.open_triangles, error_text(open).c_str(),
+          best_name.empty() ? "—" : (best_name + " " + error_text(best)).c_str(),
+          best > 0 ? ratio_text(own / best).c_str() : "—", best > 0 ? ratio_text(open / best).c_str() : "—");
+  }
+  r.add("\n");
+}
+
 // Error and time of every method at every level in two compact tables.
 void report_matrices(Report& r, const std::vector<Level>& levels, const std::vector<Peer>& peers) {
   r.add("## At a glance\n\n");
@@ -793,6 +859,7 @@ std::string make_report(const Settings& s, const RunInfo& info, const std::vecto
   report_extraction(r, levels, info.expansions);
   report_goals(r, evaluate_goals(levels, info));
   report_matrices(r, levels, peers);
+  report_open_cut(r, levels);
   report_peers(r, levels, s.timeout);
   report_notes(r, s, info, peers, levels);
   return r.text();
@@ -967,6 +1034,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "measuring %s\n", percent_label(l).c_str());
     try {
       l.fidelity = compare_surfaces(l.mesh, full, compare);
+      if (!l.peers.empty()) {
+        const TriangleMesh open = open_cut(model, l.triangles, &l.open_priority);
+        l.open_triangles = std::int64_t(open.triangles.size());
+        l.open_fidelity = compare_surfaces(open, full, compare);
+      }
     } catch (const std::exception& e) {
       l.measure_error = e.what();
     }
