@@ -33,8 +33,9 @@ bool ply_has_range_grid(const std::string& path) {
 }
 
 Kind classify(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw InputError(path, "file does not exist");
-  if (std::filesystem::is_directory(path))
+  std::error_code ec;  // the throwing overloads fail on e.g. an over-long name
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, "file does not exist");
+  if (std::filesystem::is_directory(path, ec))
     throw InputError(path, "is a folder; name its .conf or its scan files");
   std::string ext = lower_extension(path);
   if (ext == ".conf") return Kind::conf;

@@ -3,18 +3,264 @@
 #include "core/error.h"
 
 #include <pcl/PCLPointCloud2.h>
+#include <pcl/common/io.h>
 #include <pcl/io/pcd_io.h>
 
 #include <Eigen/Geometry>
 
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <sstream>
+#include <vector>
 
 namespace scan2lod {
+namespace {
+
+// What the header promises, checked before PCL sees the file: PCL 1.13's
+// reader crashes on a header without fields (it prints the field list of an
+// empty cloud), allocates POINTS x point size before reading any data, keeps
+// uninitialised sizes for unparsable numbers and trusts the sizes stored in
+// compressed data. Nothing here is read by PCL unless it passed these checks.
+struct PcdLayout {
+  enum class Data { ascii, binary, compressed } data = Data::ascii;
+  std::vector<std::string> names;
+  std::vector<int> sizes, counts;
+  std::uint64_t width = 0, height = 0, points = 0;
+  std::uint64_t point_step = 0, values_per_point = 0;
+  std::uint64_t body_offset = 0;  // first byte after the DATA line
+};
+
+std::vector<std::string> split_blanks(const std::string& line) {
+  std::vector<std::string> tokens;
+  std::size_t at = 0;
+  while ((at = line.find_first_not_of(" \t\r", at)) != std::string::npos) {
+    const std::size_t end = line.find_first_of(" \t\r", at);
+    tokens.push_back(line.substr(at, end - at));
+    at = end;
+  }
+  return tokens;
+}
+
+// A header line as it may appear in a message: bounded and printable.
+std::string shown(const std::string& line) {
+  std::string s = line.substr(0, 60);
+  for (char& c : s)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return line.size() > 60 ? s + "..." : s;
+}
+
+template <class T>
+bool parse_whole(const std::string& token, T& value) {
+  auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+  return ec == std::errc() && end == token.data() + token.size();
+}
+
+bool parse_float(const std::string& token, double& value) {
+  char* end = nullptr;
+  value = std::strtod(token.c_str(), &end);
+  return !token.empty() && end == token.c_str() + token.size();
+}
+
+PcdLayout read_pcd_layout(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open file");
+  PcdLayout L;
+  // Rank of each keyword: FIELDS, SIZE, TYPE and COUNT must come in this
+  // order and before POINTS, which PCL sizes its buffer by.
+  enum { kFields = 1, kSize, kType, kCount, kPoints };
+  int last_rank = 0;
+  bool seen_width = false, seen_height = false, seen_viewpoint = false, seen_type = false,
+       seen_data = false;
+  std::string line;
+  for (std::size_t n = 1; !seen_data && std::getline(in, line); ++n) {
+    if (n > 1000) throw InputError(path, "PCD header has no DATA line in 1000 lines");
+    if (line.empty()) continue;  // PCL skips these
+    const std::vector<std::string> t = split_blanks(line);
+    auto fail = [&](const std::string& what) {
+      throw InputError(path, "header line " + std::to_string(n) + " ('" + shown(line) + "'): " + what);
+    };
+    // PCL ends its header at a line of blanks and reads the rest as data.
+    if (t.empty()) fail("a header line of blanks only; expected a keyword");
+    const std::string& key = t[0];
+    const std::size_t values = t.size() - 1;
+    auto ordered = [&](int rank) {
+      if (rank <= last_rank)
+        fail("out of order or repeated; expected FIELDS, SIZE, TYPE, [COUNT], then POINTS");
+      last_rank = rank;
+    };
+    auto per_field = [&]() {
+      if (values != L.names.size())
+        fail("has " + std::to_string(values) + " values for " + std::to_string(L.names.size()) +
+             " FIELDS");
+    };
+    if (key[0] == '#' || key == "VERSION") continue;
+    if (key == "FIELDS" || key == "COLUMNS") {
+      ordered(kFields);
+      if (values == 0 || values > 10000) fail("expected 1 to 10000 field names");
+      L.names.assign(t.begin() + 1, t.end());
+      L.sizes.assign(values, 4);  // PCL's defaults when SIZE/TYPE/COUNT are missing
+      L.counts.assign(values, 1);
+    } else if (key == "SIZE") {
+      ordered(kSize);
+      per_field();
+      for (std::size_t i = 0; i < values; ++i) {
+        int size = 0;
+        if (!parse_whole(t[i + 1], size) || (size != 1 && size != 2 && size != 4 && size != 8))
+          fail("field '" + L.names[i] + "' has size '" + t[i + 1] + "'; expected 1, 2, 4 or 8");
+        L.sizes[i] = size;
+      }
+    } else if (key == "TYPE") {
+      ordered(kType);
+      per_field();
+      seen_type = true;
+      for (std::size_t i = 0; i < values; ++i) {
+        const std::string& type = t[i + 1];
+        const char c = type.size() == 1 ? char(std::toupper(static_cast<unsigned char>(type[0]))) : '?';
+        if ((c != 'I' && c != 'U' && c != 'F') || (c == 'F' && L.sizes[i] != 4 && L.sizes[i] != 8))
+          fail("field '" + L.names[i] + "' has type '" + type + "' for size " +
+               std::to_string(L.sizes[i]) + "; expected I, U or F (F of size 4 or 8)");
+      }
+    } else if (key == "COUNT") {
+      ordered(kCount);
+      per_field();
+      for (std::size_t i = 0; i < values; ++i)
+        if (!parse_whole(t[i + 1], L.counts[i]) || L.counts[i] < 1 || L.counts[i] > 100000)
+          fail("field '" + L.names[i] + "' has count '" + t[i + 1] + "'; expected 1 to 100000");
+    } else if (key == "WIDTH" || key == "HEIGHT") {
+      bool& seen = key == "WIDTH" ? seen_width : seen_height;
+      std::uint64_t& value = key == "WIDTH" ? L.width : L.height;
+      if (seen) fail("repeated");
+      seen = true;
+      if (values != 1 || !parse_whole(t[1], value) || value > 0x7fffffffu)
+        fail("expected one count below 2^31");
+    } else if (key == "VIEWPOINT") {
+      if (seen_viewpoint) fail("repeated");
+      seen_viewpoint = true;
+      double v[7];
+      if (values != 7) fail("expected 7 numbers (tx ty tz qw qx qy qz)");
+      for (int i = 0; i < 7; ++i)
+        if (!parse_float(t[i + 1], v[i]) || !std::isfinite(v[i])) fail("expected 7 finite numbers");
+      if (std::hypot(std::hypot(v[3], v[4]), std::hypot(v[5], v[6])) < 1e-6)
+        fail("the orientation quaternion is zero");
+    } else if (key == "POINTS") {
+      ordered(kPoints);
+      if (values != 1 || !parse_whole(t[1], L.points) || L.points > 0x7fffffffu)
+        fail("expected one count below 2^31");
+    } else if (key == "DATA") {
+      if (values < 1) fail("expected ascii, binary or binary_compressed");
+      if (t[1] == "ascii") L.data = PcdLayout::Data::ascii;
+      else if (t[1] == "binary") L.data = PcdLayout::Data::binary;
+      else if (t[1] == "binary_compressed") L.data = PcdLayout::Data::compressed;
+      else fail("expected ascii, binary or binary_compressed");
+      L.body_offset = std::uint64_t(in.tellg());
+      seen_data = true;
+    } else {
+      fail("unknown keyword '" + shown(key) + "'");
+    }
+  }
+  if (!seen_data) throw InputError(path, "PCD header ends before its DATA line");
+  if (L.names.empty() || !seen_type || last_rank < kPoints)
+    throw InputError(path, "PCD header needs FIELDS, SIZE, TYPE and POINTS lines");
+  if (!seen_width || !seen_height) throw InputError(path, "PCD header needs WIDTH and HEIGHT lines");
+  if (L.width * L.height != L.points)
+    throw InputError(path, "PCD header: WIDTH " + std::to_string(L.width) + " x HEIGHT " +
+                               std::to_string(L.height) + " differs from POINTS " +
+                               std::to_string(L.points));
+  if (L.points == 0) throw InputError(path, "the cloud is empty");
+  if (L.height == 1)
+    throw InputError(path, "the cloud is not organized (height 1); a range image needs "
+                           "width x height with NaN for no return");
+  for (std::size_t i = 0; i < L.names.size(); ++i) {
+    L.point_step += std::uint64_t(L.sizes[i]) * std::uint64_t(L.counts[i]);
+    L.values_per_point += std::uint64_t(L.counts[i]);
+  }
+  if (L.point_step > 0xffffffu) throw InputError(path, "PCD header: a point of more than 16 MB");
+
+  // PCL goes on reading header lines after DATA until one is not a keyword;
+  // data that starts like one would change the layout behind our back.
+  for (int k = 0; k < 1000 && std::getline(in, line); ++k) {
+    if (line.empty()) continue;
+    std::string key;
+    std::istringstream(line) >> key;
+    if (key.rfind('#', 0) == 0 || key.rfind("VERSION", 0) == 0) continue;
+    for (const char* keyword : {"FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT",
+                                "VIEWPOINT", "POINTS", "DATA"})
+      if (key.rfind(keyword, 0) == 0)
+        throw InputError(path, "the data after the DATA line starts with a header keyword ('" +
+                                   shown(line) + "')");
+    break;
+  }
+  return L;
+}
+
+// The body must hold what the header promises before PCL allocates for it.
+void check_pcd_body(const std::string& path, const PcdLayout& L) {
+  std::error_code ec;
+  const std::uint64_t size = std::filesystem::file_size(path, ec);
+  const std::uint64_t body = ec || size < L.body_offset ? 0 : size - L.body_offset;
+  const std::uint64_t data_bytes = L.points * L.point_step;
+  if (L.data == PcdLayout::Data::binary) {
+    if (body < data_bytes)
+      throw InputError(path, "binary data has " + std::to_string(body) + " bytes, the header's " +
+                                 std::to_string(L.points) + " points need " +
+                                 std::to_string(data_bytes) + " (truncated)");
+    return;
+  }
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(std::streamoff(L.body_offset));
+  if (L.data == PcdLayout::Data::compressed) {
+    std::uint32_t sizes[2] = {0, 0};  // compressed, uncompressed
+    if (body < 8 || !in.read(reinterpret_cast<char*>(sizes), sizeof sizes))
+      throw InputError(path, "binary_compressed data lacks its two size words (truncated)");
+    if (sizes[0] > body - 8)
+      throw InputError(path, "binary_compressed data claims " + std::to_string(sizes[0]) +
+                                 " compressed bytes, the file holds " + std::to_string(body - 8) +
+                                 " (truncated)");
+    if (sizes[1] != data_bytes)
+      throw InputError(path, "binary_compressed data claims " + std::to_string(sizes[1]) +
+                                 " bytes uncompressed, the header's " + std::to_string(L.points) +
+                                 " points need " + std::to_string(data_bytes));
+    // LZF expands at most 88-fold (3 bytes for a 264-byte match).
+    if (data_bytes > 88 * std::uint64_t(sizes[0]) + 32)
+      throw InputError(path, "binary_compressed data: " + std::to_string(sizes[0]) +
+                                 " compressed bytes cannot hold " + std::to_string(data_bytes));
+    return;
+  }
+  // ASCII: PCL turns a line with the wrong number of values into a point of
+  // zeros (and a blank-only line into a point), so every point line is checked.
+  std::string line;
+  std::uint64_t line_no = 0;
+  for (std::uint64_t p = 0; p < L.points; ++p) {
+    do {
+      if (!std::getline(in, line))
+        throw InputError(path, "file ends at point " + std::to_string(p) + " of " +
+                                   std::to_string(L.points) + " (truncated)");
+      ++line_no;
+    } while (line.empty());
+    const std::vector<std::string> t = split_blanks(line);
+    bool ok = t.size() == L.values_per_point;
+    double value;
+    for (std::size_t i = 0; ok && i < t.size(); ++i) ok = parse_float(t[i], value);
+    if (!ok)
+      throw InputError(path, "data line " + std::to_string(line_no) + ": point " +
+                                 std::to_string(p) + " needs " + std::to_string(L.values_per_point) +
+                                 " numbers, got '" + shown(line) + "'");
+  }
+}
+
+}  // namespace
 
 RangeImage read_organized_pcd(const std::string& path, ScanPose* pose) {
-  if (!std::filesystem::exists(path)) throw InputError(path, "file does not exist");
+  std::error_code ec;  // the throwing overload fails on e.g. an over-long name
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, "file does not exist");
+  const PcdLayout layout = read_pcd_layout(path);
+  check_pcd_body(path, layout);
   pcl::PCLPointCloud2 cloud;
   Eigen::Vector4f origin;
   Eigen::Quaternionf orientation;
@@ -22,6 +268,10 @@ RangeImage read_organized_pcd(const std::string& path, ScanPose* pose) {
   pcl::PCDReader reader;
   if (reader.read(path, cloud, origin, orientation, pcd_version, 0) < 0)
     throw InputError(path, "PCL could not parse the PCD file (bad header or truncated data)");
+  if (cloud.width != layout.width || cloud.height != layout.height ||
+      cloud.point_step != layout.point_step ||
+      cloud.data.size() != std::size_t(layout.points * layout.point_step))
+    throw InputError(path, "PCL read a cloud of another size than the header gives");
   if (cloud.width == 0 || cloud.height == 0) throw InputError(path, "the cloud is empty");
   if (cloud.height == 1)
     throw InputError(path, "the cloud is not organized (height 1); a range image needs "
@@ -35,6 +285,11 @@ RangeImage read_organized_pcd(const std::string& path, ScanPose* pose) {
     if (f.name == "rgb" || f.name == "rgba") frgb = &f;
   }
   if (!fx || !fy || !fz) throw InputError(path, "the cloud needs float fields x, y and z");
+  // Every field read below is 4 bytes at its offset.
+  if (frgb && pcl::getFieldSize(frgb->datatype) != 4) frgb = nullptr;
+  for (const pcl::PCLPointField* f : {fx, fy, fz, frgb})
+    if (f && std::uint64_t(f->offset) + 4 > cloud.point_step)
+      throw InputError(path, "field '" + f->name + "' lies outside the point");
 
   RangeImage image;
   image.cols = int(cloud.width);

@@ -8,12 +8,16 @@
 
 #include <Eigen/Geometry>
 
+#include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 namespace scan2lod {
 namespace {
@@ -30,6 +34,10 @@ struct PlyLayout {
   std::size_t vertex_stride = 0;  // bytes, binary only
   bool has_xyz[3] = {false, false, false};
   bool has_grid = false;
+  bool has_vertex = false;
+  std::size_t grid_properties = 0;
+  std::size_t grid_count_size = 0;  // bytes of each cell's index count
+  bool grid_count_signed = false;
 };
 
 std::size_t type_size(const std::string& t) {
@@ -63,6 +71,9 @@ PlyLayout read_layout(const std::string& path, std::ifstream& in) {
     auto fail = [&](const std::string& what) {
       throw InputError(path, "header line " + std::to_string(n) + " ('" + line + "'): " + what);
     };
+    // PCL asserts (aborts) on an obj_info line that does not start with the keyword.
+    if (!line.empty() && std::isspace(static_cast<unsigned char>(line[0])))
+      fail("starts with blanks; a header line starts with its keyword");
     if (key == "format") {
       std::string f;
       ls >> f;
@@ -82,7 +93,11 @@ PlyLayout read_layout(const std::string& path, std::ifstream& in) {
       long long count = -1;
       ls >> element >> count;
       if (count < 0) fail("expected 'element NAME COUNT' with COUNT >= 0");
-      if (element == "vertex") L.vertices = std::size_t(count);
+      if ((element == "vertex" && L.has_vertex) || (element == "range_grid" && L.has_grid))
+        fail("element '" + element + "' appears twice");
+      // The body checks below read the vertices first, as PCL's writer puts them.
+      if (element == "range_grid" && !L.has_vertex) fail("element range_grid must follow element vertex");
+      if (element == "vertex") L.vertices = std::size_t(count), L.has_vertex = true;
       else if (element == "range_grid") L.grid_cells = std::size_t(count), L.has_grid = true;
       else if (element == "face") L.faces = std::size_t(count);
       else if (count > 0) fail("unexpected element '" + element + "' in a range-grid PLY");
@@ -103,8 +118,16 @@ PlyLayout read_layout(const std::string& path, std::ifstream& in) {
       } else if (element == "range_grid") {
         std::string count_type, index_type;
         ls >> count_type >> index_type;
-        if (type != "list" || type_size(count_type) == 0 || type_size(index_type) != 4)
-          fail("range_grid must be 'property list uchar int vertex_indices'");
+        const bool integer_count = count_type.find("int") != std::string::npos ||
+                                   count_type.find("char") != std::string::npos ||
+                                   count_type.find("short") != std::string::npos;
+        const bool integer_index = index_type == "int" || index_type == "int32" ||
+                                   index_type == "uint" || index_type == "uint32";
+        if (type != "list" || type_size(count_type) == 0 || !integer_count || !integer_index ||
+            ++L.grid_properties > 1)
+          fail("range_grid must have one property, 'property list uchar int vertex_indices'");
+        L.grid_count_size = type_size(count_type);
+        L.grid_count_signed = count_type[0] != 'u';
       }
     } else if (key == "end_header") {
       ended = true;
@@ -122,7 +145,24 @@ PlyLayout read_layout(const std::string& path, std::ifstream& in) {
   if (!(L.has_xyz[0] && L.has_xyz[1] && L.has_xyz[2]))
     throw InputError(path, "element vertex needs float properties x, y and z");
   if (L.faces > 0) throw InputError(path, "a range-grid PLY must not have faces");
+  // PCL sizes its vertex buffer by the grid and asserts (aborts) past it.
+  if (L.vertices > L.grid_cells)
+    throw InputError(path, "element vertex has " + std::to_string(L.vertices) +
+                               " vertices, more than the " + std::to_string(L.grid_cells) +
+                               " range_grid cells they belong to");
+  if (L.grid_properties != 1)
+    throw InputError(path, "element range_grid needs 'property list uchar int vertex_indices'");
   return L;
+}
+
+// PCL applies the grid only when it has more cells than vertices; with as many,
+// it returns the vertices in file order, right only if cell c names vertex c.
+void check_cell_order(const std::string& path, const PlyLayout& L, std::size_t cell,
+                      long long count, long long first_index) {
+  if (L.vertices == L.grid_cells && (count == 0 || first_index != (long long)cell))
+    throw InputError(path, "range_grid cell " + std::to_string(cell) + " does not name vertex " +
+                               std::to_string(cell) + "; with as many vertices as cells, PCL's "
+                               "reader would ignore the grid, so each cell must name its own");
 }
 
 // PCL silently turns an unparsable ASCII vertex into a hole, so the body is
@@ -156,23 +196,82 @@ void check_ascii_body(const std::string& path, std::ifstream& in, const PlyLayou
     if (!(ls >> count) || count < 0 || count > 255)
       throw InputError(path, "line " + std::to_string(line_no) + ": range_grid cell " +
                                  std::to_string(c) + " must start with an index count");
+    long long first = -1;
     for (long k = 0; k < count; ++k) {
       long long index = -1;
       if (!(ls >> index) || index < 0 || std::size_t(index) >= L.vertices)
         throw InputError(path, "line " + std::to_string(line_no) + ": range_grid cell " +
                                    std::to_string(c) + " has a vertex index outside [0, " +
                                    std::to_string(L.vertices) + ")");
+      if (k == 0) first = index;
     }
+    check_cell_order(path, L, c, count, first);
   }
 }
 
 void check_binary_size(const std::string& path, const PlyLayout& L) {
-  std::uintmax_t size = std::filesystem::file_size(path);
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) throw InputError(path, "cannot tell the file's size: " + ec.message());
   // Every cell holds at least its count byte; every vertex is referenced once.
+  // The counts come from the header: compare by division first, as a product
+  // can wrap (2^62 vertices x 12 bytes is 0) and PCL asserts on such counts.
+  const std::uintmax_t body = size > L.header_bytes ? size - L.header_bytes : 0;
+  if (L.vertex_stride == 0 || L.vertices > body / L.vertex_stride || L.grid_cells > body)
+    throw InputError(path, "file has " + std::to_string(size) + " bytes, too few for the header's " +
+                               std::to_string(L.vertices) + " vertices and " +
+                               std::to_string(L.grid_cells) + " range_grid cells (truncated)");
   std::uintmax_t minimum = L.header_bytes + L.vertices * L.vertex_stride + L.grid_cells;
   if (size < minimum)
     throw InputError(path, "file has " + std::to_string(size) + " bytes, the header needs at least " +
                                std::to_string(minimum) + " (truncated)");
+}
+
+// PCL bounds a cell's vertex index only from above, as a signed product with
+// the point size: a negative index reads before its buffer and the index
+// one past the last vertex reads past it. The binary body is checked here
+// first, like the ASCII one.
+void check_binary_grid(const std::string& path, const PlyLayout& L) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(std::streamoff(L.header_bytes + L.vertices * L.vertex_stride));
+  const std::vector<char> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const bool big_endian = L.format == PlyLayout::Format::binary_be;
+  std::size_t at = 0;
+  // Reads `size` bytes as a two's-complement integer; false at the end of the data.
+  auto next = [&](std::size_t size, bool is_signed, long long& value) {
+    if (data.size() - at < size) return false;
+    std::uint64_t u = 0;
+    for (std::size_t k = 0; k < size; ++k) {
+      const std::uint8_t byte = std::uint8_t(data[at + (big_endian ? k : size - 1 - k)]);
+      u = (u << 8) | byte;
+    }
+    at += size;
+    if (is_signed && size < 8 && (u >> (8 * size - 1)) != 0) u |= ~std::uint64_t(0) << (8 * size);
+    value = static_cast<long long>(u);
+    return true;
+  };
+  for (std::size_t c = 0; c < L.grid_cells; ++c) {
+    long long count = 0;
+    if (!next(L.grid_count_size, L.grid_count_signed, count))
+      throw InputError(path, "file ends at range_grid cell " + std::to_string(c) + " of " +
+                                 std::to_string(L.grid_cells) + " (truncated)");
+    if (count < 0 || count > 255)
+      throw InputError(path, "range_grid cell " + std::to_string(c) + " has " +
+                                 std::to_string(count) + " vertex indices, expected 0 to 255");
+    long long first = -1;
+    for (long long k = 0; k < count; ++k) {
+      long long index = -1;
+      if (!next(4, true, index))
+        throw InputError(path, "file ends at range_grid cell " + std::to_string(c) + " of " +
+                                   std::to_string(L.grid_cells) + " (truncated)");
+      if (index < 0 || std::size_t(index) >= L.vertices)
+        throw InputError(path, "range_grid cell " + std::to_string(c) +
+                                   " has a vertex index outside [0, " +
+                                   std::to_string(L.vertices) + ")");
+      if (k == 0) first = index;
+    }
+    check_cell_order(path, L, c, count, first);
+  }
 }
 
 const pcl::PCLPointField* find_field(const pcl::PCLPointCloud2& c, const char* name) {
@@ -194,8 +293,11 @@ RangeImage read_range_grid_ply(const std::string& path) {
   if (!in) throw InputError(path, "cannot open file");
   PlyLayout L = read_layout(path, in);
   if (L.format == PlyLayout::Format::ascii) check_ascii_body(path, in, L);
-  else check_binary_size(path, L);
   in.close();
+  if (L.format != PlyLayout::Format::ascii) {
+    check_binary_size(path, L);
+    check_binary_grid(path, L);
+  }
 
   pcl::PCLPointCloud2 cloud;
   Eigen::Vector4f origin;
@@ -308,7 +410,8 @@ std::vector<ConfEntry> read_conf(const std::string& path) {
     e.file = (folder / file).string();
     e.pose.rotation = quat.normalized().toRotationMatrix().transpose();
     e.pose.translation = Vec3f(t[0], t[1], t[2]);
-    if (!std::filesystem::exists(e.file))
+    std::error_code ec;  // e.g. a name too long for the file system: not found either
+    if (!std::filesystem::exists(e.file, ec))
       throw InputError(path, "line " + std::to_string(n) + ": scan '" + file +
                                  "' does not exist (looked for " + e.file + ")");
     entries.push_back(std::move(e));

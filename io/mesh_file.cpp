@@ -28,16 +28,21 @@
 #include <vtkSmartPointer.h>
 #include <vtkTypeInt32Array.h>
 #include <vtkUnsignedCharArray.h>
+#include <vtkXMLDataElement.h>
+#include <vtkXMLDataParser.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
 
 #include <algorithm>
 #include <charconv>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <mutex>
 #include <sstream>
 #include <string_view>
@@ -269,12 +274,41 @@ ExpectedCounts check_ply_header(const std::string& path) {
     std::string key;
     words >> key;
     const std::string where = "PLY header line " + std::to_string(n);
+    // OpenMesh reads the header as a stream of words, not lines: its format
+    // is the 2nd to 4th word, and a keyword anywhere (say after the version
+    // or in an obj_info line) starts a new entry, e.g. a property before any
+    // element, which it appends to an element that does not exist (a crash).
+    // So every line must have exactly the words its keyword takes.
+    std::size_t word_count = 0;
+    bool has_keyword = false;
+    {
+      std::istringstream all(line);
+      for (std::string w; all >> w; ++word_count)
+        has_keyword |= word_count > 0 && (w == "format" || w == "element" || w == "property" ||
+                                          w == "end_header" || w == "comment");
+    }
+    auto expect_words = [&](std::size_t count, const char* form) {
+      if (word_count != count)
+        throw InputError(path, where + ": expected '" + form + "', got '" + line + "'");
+    };
+    if ((n == 2) != (key == "format"))
+      throw InputError(path, where + ": expected the format line right after 'ply', and only there");
+    if (key == "obj_info" && has_keyword)
+      throw InputError(path, where + ": obj_info holds a PLY keyword, which OpenMesh would read as one");
     if (key == "format") {
+      expect_words(3, "format FORMAT 1.0");
       words >> format;
+      std::string version;
+      words >> version;
+      char* end = nullptr;
+      std::strtod(version.c_str(), &end);
+      if (end != version.c_str() + version.size())
+        throw InputError(path, where + ": version '" + version + "' is not a number");
       if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
         throw InputError(path, where + ": unknown format '" + format +
                                    "', expected ascii, binary_little_endian or binary_big_endian");
     } else if (key == "element") {
+      expect_words(3, "element NAME COUNT");
       Element e;
       long long count = -1;
       words >> e.name >> count;
@@ -287,6 +321,8 @@ ExpectedCounts check_ply_header(const std::string& path) {
       Property p;
       std::string type;
       words >> type;
+      if (type == "list") expect_words(5, "property list COUNT_TYPE ITEM_TYPE NAME");
+      else expect_words(3, "property TYPE NAME");
       if (type == "list") {
         std::string count_type, item_type;
         words >> count_type >> item_type >> p.name;
@@ -305,6 +341,7 @@ ExpectedCounts check_ply_header(const std::string& path) {
       if (p.name.empty()) throw InputError(path, where + ": property has no name");
       elements.back().props.push_back(p);
     } else if (key == "end_header") {
+      expect_words(1, "end_header");
       ended = true;
     } else if (key != "comment" && key != "obj_info" && !key.empty()) {
       throw InputError(path, where + ": unknown keyword '" + key + "'");
@@ -637,6 +674,79 @@ std::string first_line(std::string s) {
   return s;
 }
 
+// Parses an XML count attribute as VTK would accept it; false when it is not
+// a plain integer (VTK would read "3444...4" as INT_MAX, "7x" as 7).
+bool vtk_count(vtkXMLDataElement* e, const char* name, long long fallback, long long& value) {
+  const char* text = e->GetAttribute(name);
+  if (!text) {
+    value = fallback;
+    return true;
+  }
+  errno = 0;
+  char* end = nullptr;
+  value = std::strtoll(text, &end, 10);
+  while (end && std::isspace(static_cast<unsigned char>(*end))) ++end;
+  return end != text && *end == '\0' && errno == 0 && value >= 0;
+}
+
+// VTK sizes its arrays by the XML's counts before it reads any data (a
+// 400-byte file asked for 4.8 GB by NumberOfPoints), and loops over a
+// "ComponentName<i>" attribute per component (a NumberOfComponents of 2^31
+// hangs for minutes). So the arrays the counts imply must fit the file: a
+// value takes at least a byte, or a 10000th of one when compressed.
+void check_vtp_counts(const std::string& path, vtkXMLDataElement* root) {
+  const std::uintmax_t size = file_size_or_zero(path);
+  const bool compressed = root->GetAttribute("compressor") != nullptr;
+  const long double budget = (long double)size * (compressed ? 10000.0L : 1.0L) + 1024.0L;
+  long double values = 0;
+  auto too_many = [&](const std::string& what) {
+    return InputError(path, what + ": more values than a file of " + std::to_string(size) +
+                                " bytes can hold");
+  };
+  // Per piece: points, then verts, lines, strips, polys.
+  struct Counts {
+    long long n[5] = {0, 0, 0, 0, 0};
+  };
+  const char* const kPieceCounts[5] = {"NumberOfPoints", "NumberOfVerts", "NumberOfLines",
+                                       "NumberOfStrips", "NumberOfPolys"};
+  const char* const kCellKinds[4] = {"Verts", "Lines", "Strips", "Polys"};
+  std::function<void(vtkXMLDataElement*, const std::string&, const Counts&)> walk =
+      [&](vtkXMLDataElement* e, const std::string& parent, const Counts& outer) {
+        const std::string name = e->GetName() ? e->GetName() : "";
+        Counts piece = outer;
+        if (name == "Piece") {
+          for (int k = 0; k < 5; ++k) {
+            if (!vtk_count(e, kPieceCounts[k], 0, piece.n[k]))
+              throw InputError(path, "Piece " + std::string(kPieceCounts[k]) + "=\"" +
+                                         e->GetAttribute(kPieceCounts[k]) + "\": expected a count");
+            if ((long double)piece.n[k] > budget)
+              throw too_many("Piece " + std::string(kPieceCounts[k]) + "=" + std::to_string(piece.n[k]));
+          }
+        } else if (name == "DataArray" || name == "Array") {
+          const char* array = e->GetAttribute("Name");
+          const std::string what = name + (array ? " '" + std::string(array) + "'" : std::string());
+          long long components = 1, tuples = 0;
+          if (!vtk_count(e, "NumberOfComponents", 1, components) || components < 1 ||
+              components > 10000)
+            throw InputError(path, what + " NumberOfComponents=\"" +
+                                       e->GetAttribute("NumberOfComponents") + "\": expected 1 to 10000");
+          const long long cells = piece.n[1] + piece.n[2] + piece.n[3] + piece.n[4];
+          if (parent == "Points" || parent == "PointData") tuples = piece.n[0];
+          else if (parent == "CellData") tuples = cells;
+          else if (!vtk_count(e, "NumberOfTuples", 0, tuples))
+            throw InputError(path, what + " NumberOfTuples=\"" + e->GetAttribute("NumberOfTuples") +
+                                       "\": expected a count");
+          for (int k = 0; k < 4; ++k)  // a cell array's offsets: one per cell
+            if (parent == kCellKinds[k] && array && std::string(array) == "offsets") tuples = piece.n[k + 1];
+          values += (long double)tuples * (long double)components;
+          if (values > budget)
+            throw too_many(what + " of " + std::to_string(tuples) + " x " + std::to_string(components));
+        }
+        for (int i = 0; i < e->GetNumberOfNestedElements(); ++i) walk(e->GetNestedElement(i), name, piece);
+      };
+  walk(root, "", Counts{});
+}
+
 TriangleMesh read_vtp(const std::string& path) {
   VtkErrorCatcher errors;  // outlives the reader that reports to it
   vtkNew<vtkXMLPolyDataReader> reader;
@@ -647,6 +757,15 @@ TriangleMesh read_vtp(const std::string& path) {
   reader->SetParserErrorObserver(errors.command());
   reader->SetReaderErrorObserver(errors.command());
   reader->SetFileName(path.c_str());
+  try {
+    reader->UpdateInformation();  // parses the XML, reads no data
+  } catch (const std::exception& e) {
+    throw InputError(path, std::string("cannot parse as vtp: ") + e.what());
+  }
+  if (!errors.message().empty() || reader->GetErrorCode() != 0)
+    throw InputError(path, "cannot parse as vtp: " + first_line(errors.message()));
+  if (vtkXMLDataParser* parser = reader->GetXMLParser())
+    if (vtkXMLDataElement* root = parser->GetRootElement()) check_vtp_counts(path, root);
   try {
     reader->Update();
   } catch (const std::exception& e) {  // e.g. bad_alloc for a garbled array size

@@ -25,6 +25,9 @@ namespace scan2lod {
 // PLY (`element range_grid`) is rejected with a hint to read it as a scan.
 // Caveat: a damaged *compressed* .vtp (as ParaView writes by default) can crash
 // inside VTK's reader; damaged uncompressed ones (as written here) are reported.
+// The XML's counts are checked against the file's size before VTK allocates,
+// but VTK sizes a cell array's connectivity by the last value of its offsets
+// data, so a few hundred bytes can still make it ask for gigabytes.
 // Thread-safe; PLY/OFF/STL reads are serialised internally (OpenMesh's readers
 // are singletons with per-file state).
 TriangleMesh read_mesh(const std::string& path);

@@ -12,6 +12,8 @@
 #include "test_support.h"
 
 #include <gtest/gtest.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
 
 #include <filesystem>
 #include <fstream>
@@ -109,6 +111,9 @@ TEST(RangeGrid, BadFilesNameTheFileAndTheElement) {
       {"truncated", good.substr(0, good.size() - 8), "truncated"},
       {"bad_index", [&] { std::string s = good; s.replace(s.rfind("1 4\n"), 3, "1 9"); return s; }(),
        "vertex index"},
+      // PCL asserted (aborted) on it; found by tests/fuzz/inputs_fuzzer.
+      {"indented_obj_info", [&] { std::string s = good; s.insert(s.find("obj_info num_rows"), " "); return s; }(),
+       "starts with blanks"},
   };
   for (const Case& c : cases) {
     fs::path p = scratch(c.name + ".ply");
@@ -130,6 +135,80 @@ TEST(RangeGrid, TruncatedBinaryFilesAreErrorsAtEveryLength) {
   }
 }
 
+// The tiny grid in binary little-endian: `vertices` in the header, `rows`
+// vertex records written, and cell 4 naming vertex `index`.
+std::string binary_grid(const std::string& vertices, int rows, std::int32_t index) {
+  std::string s = "ply\nformat binary_little_endian 1.0\nobj_info num_cols 3\nobj_info num_rows 2\n"
+                  "element vertex " + vertices + "\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element range_grid 6\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int v = 0; v < rows; ++v) {
+    const float p[3] = {float(v % 3), float(v / 3), 0.f};
+    s.append(reinterpret_cast<const char*>(p), sizeof p);
+  }
+  for (std::int32_t c = 0; c < 6; ++c) {
+    if (c == 5) {
+      s += '\0';  // a hole
+      continue;
+    }
+    const std::int32_t i = c == 4 ? index : c;
+    s += '\1';
+    s.append(reinterpret_cast<const char*>(&i), 4);
+  }
+  return s;
+}
+
+TEST(RangeGrid, BinaryIndicesAndVertexCountsAreChecked) {
+  // Found by tests/fuzz/inputs_fuzzer and its review: PCL 1.13 reads before
+  // its buffer for a negative cell index, hands back an unread (0,0,0) for the
+  // index one past the last vertex, and asserts (aborts) when there are more
+  // vertices than cells, e.g. 2^62 of them, whose byte count wraps to 0.
+  {
+    fs::path p = scratch("binary_ok.ply");
+    spit(p, binary_grid("5", 5, 4));
+    RangeImage image = read_range_grid_ply(p.string());
+    EXPECT_EQ(image.points[4], Vec3f(1.f, 1.f, 0.f));
+    EXPECT_TRUE(std::isnan(image.points[5].x()));
+  }
+  // The tiny grid with a sixth vertex and the given cell lines.
+  auto full_grid = [](const std::string& cells) {
+    std::string s = kTinyGrid;
+    s.replace(s.find("vertex 5"), 8, "vertex 6");
+    s.replace(s.find("1 0\n1 1\n"), std::string::npos, "2 1 0\n" + cells);
+    return s;
+  };
+  {
+    fs::path p = scratch("full_grid.ply");
+    spit(p, full_grid("1 0\n1 1\n1 2\n1 3\n1 4\n1 5\n"));
+    RangeImage image = read_range_grid_ply(p.string());
+    EXPECT_EQ(image.points[5], Vec3f(2.f, 1.f, 0.f));
+  }
+  std::string more_ascii = kTinyGrid;
+  more_ascii.replace(more_ascii.find("vertex 5"), 8, "vertex 7");
+  more_ascii.insert(more_ascii.find("1 0\n1 1\n"), "2 1 0\n3 3 3\n");
+  struct Case {
+    std::string name, text, expect;
+  };
+  const std::vector<Case> cases = {
+      {"negative_index", binary_grid("5", 5, -1), "cell 4 has a vertex index outside [0, 5)"},
+      {"index_past_end", binary_grid("5", 5, 5), "cell 4 has a vertex index outside [0, 5)"},
+      {"more_vertices", binary_grid("7", 7, 4), "more than the 6 range_grid cells"},
+      {"more_vertices_ascii", more_ascii, "more than the 6 range_grid cells"},
+      {"wrapping_count", binary_grid("4611686018427387904", 5, 4), "range_grid cells"},
+      {"truncated_cell", binary_grid("5", 5, 4).substr(0, binary_grid("5", 5, 4).size() - 3),
+       "truncated"},
+      // With as many vertices as cells PCL ignores the grid and returns the
+      // vertices in file order; found while reading PCL for the cases above.
+      {"full_grid_out_of_order", full_grid("1 5\n1 4\n1 3\n1 2\n1 1\n1 0\n"), "does not name vertex 0"},
+  };
+  for (const Case& c : cases) {
+    fs::path p = scratch(c.name + ".ply");
+    spit(p, c.text);
+    std::string message = input_error([&] { read_range_grid_ply(p.string()); });
+    EXPECT_NE(message.find(p.string()), std::string::npos) << c.name << ": " << message;
+    EXPECT_NE(message.find(c.expect), std::string::npos) << c.name << ": " << message;
+  }
+}
+
 TEST(Conf, MissingScanIsNamedWithItsLine) {
   fs::path p = scratch("bad.conf");
   spit(p, "camera 0 0 0 0 0 0 1\nbmesh missing_scan.ply 0 0 0 0 0 0 1\n");
@@ -140,6 +219,17 @@ TEST(Conf, MissingScanIsNamedWithItsLine) {
   EXPECT_NE(input_error([&] { read_conf(p.string()); }).find("bmesh FILE"), std::string::npos);
   spit(p, "# nothing here\n");
   EXPECT_NE(input_error([&] { read_conf(p.string()); }).find("no 'bmesh'"), std::string::npos);
+  // A name too long for the file system made std::filesystem::exists throw
+  // filesystem_error instead of InputError (found by inputs_fuzzer's review).
+  const std::string long_name(300, 'a');
+  spit(p, "bmesh " + long_name + ".ply 0 0 0 0 0 0 1\n");
+  EXPECT_NE(input_error([&] { read_conf(p.string()); }).find("does not exist"), std::string::npos);
+  EXPECT_NE(input_error([&] { load_oriented_points({(scratch("") / (long_name + ".pcd")).string()}); })
+                .find("does not exist"),
+            std::string::npos);
+  EXPECT_NE(input_error([&] { read_organized_pcd((scratch("") / (long_name + ".pcd")).string(), nullptr); })
+                .find("does not exist"),
+            std::string::npos);
 }
 
 TEST(Conf, ConjugateQuaternionPutsTheBunnyOnTheReference) {
@@ -207,6 +297,82 @@ TEST(OrganizedPcd, ReadsWidthByHeightAndRejectsUnorganized) {
           "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\nDATA ascii\nnan nan nan\nnan nan nan\nnan nan nan\nnan nan nan\n");
   EXPECT_NE(input_error([&] { read_organized_pcd(p.string(), nullptr); }).find("no finite points"),
             std::string::npos);
+}
+
+TEST(OrganizedPcd, ReadsWhatPclWritesInEveryDataFormat) {
+  pcl::PointCloud<pcl::PointXYZ> cloud(3, 2);
+  for (std::size_t i = 0; i < cloud.size(); ++i) cloud[i] = pcl::PointXYZ(float(i % 3), float(i / 3), 1.f + 0.25f * float(i));
+  cloud[4].x = cloud[4].y = cloud[4].z = std::nanf("");
+  cloud.is_dense = false;
+  pcl::PCDWriter writer;
+  for (int format = 0; format < 3; ++format) {
+    fs::path p = scratch("written" + std::to_string(format) + ".pcd");
+    if (format == 0) writer.writeASCII(p.string(), cloud);
+    if (format == 1) writer.writeBinary(p.string(), cloud);
+    if (format == 2) writer.writeBinaryCompressed(p.string(), cloud);
+    RangeImage image = read_organized_pcd(p.string(), nullptr);
+    ASSERT_EQ(image.points.size(), 6u) << format;
+    for (std::size_t i = 0; i < 6; ++i) {
+      if (i == 4) {
+        EXPECT_TRUE(std::isnan(image.points[i].x())) << format;
+      } else {
+        EXPECT_EQ(image.points[i], Vec3f(cloud[i].x, cloud[i].y, cloud[i].z)) << format << " at " << i;
+      }
+    }
+  }
+}
+
+TEST(OrganizedPcd, BadFilesNameTheFileAndTheElement) {
+  // Found by tests/fuzz/inputs_fuzzer: PCL 1.13's reader dereferences null on
+  // a header without fields (the empty file, an unknown first line, COUNT 0),
+  // allocates POINTS x point size up front, overflows its buffer when the
+  // compressed block's size word is wrong, and turns short ASCII lines into
+  // points at the origin. The header and body are now checked before PCL reads.
+  const std::string head = "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
+  const std::string size = "WIDTH 2\nHEIGHT 2\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\n";
+  const std::string good = head + size + "DATA ascii\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n";
+  auto replace = [&](std::string from, std::string to) {
+    std::string s = good;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  std::string compressed = head + size + "DATA binary_compressed\n";
+  const std::uint32_t words[2] = {5, 4};  // uncompressed should be 4 points x 12 bytes
+  compressed.append(reinterpret_cast<const char*>(words), 8);
+  compressed += std::string("\x03" "abcd", 5);
+  struct Case {
+    std::string name, text, expect;
+  };
+  const std::vector<Case> cases = {
+      {"empty", "", "DATA line"},
+      {"garbage_first_line", "SVRO IEN .7\n" + good, "unknown keyword 'SVRO'"},
+      {"count_zero", replace("COUNT 1 1 1", "COUNT 0 0 0"), "count '0'"},
+      {"bad_size", replace("SIZE 4 4 4", "SIZE 4 x 4"), "size 'x'"},
+      {"no_data", head + size, "DATA line"},
+      {"points_mismatch", replace("POINTS 4", "POINTS 5"), "POINTS 5"},
+      {"huge_points", head + "WIDTH 20000\nHEIGHT 20000\nPOINTS 400000000\nDATA binary\n0000", "truncated"},
+      {"too_many_points", replace("POINTS 4", "POINTS 4000000000"), "below 2^31"},
+      {"compressed_size", compressed, "uncompressed"},
+      {"short_line", replace("1 0 1\n", "1 0\n"), "point 1 needs 3 numbers"},
+      {"blank_line", replace("1 0 1\n", " \n"), "point 1 needs 3 numbers"},
+      {"truncated", good.substr(0, good.size() - 6), "file ends at point 3"},
+      {"keyword_after_data", replace("DATA ascii\n", "DATA ascii\nPOINTS 9\n"), "header keyword"},
+      {"zero_viewpoint", replace("0 0 0 1 0 0 0", "0 0 0 0 0 0 0"), "quaternion is zero"},
+  };
+  for (const Case& c : cases) {
+    fs::path p = scratch("bad_" + c.name + ".pcd");
+    spit(p, c.text);
+    std::string message = input_error([&] { read_organized_pcd(p.string(), nullptr); });
+    EXPECT_NE(message.find(p.string()), std::string::npos) << c.name << ": " << message;
+    EXPECT_NE(message.find(c.expect), std::string::npos) << c.name << ": " << message;
+  }
+  // A one-byte rgba field was read as four bytes, past the end of the cloud.
+  fs::path p = scratch("narrow_rgba.pcd");
+  spit(p, "FIELDS x y z rgba\nSIZE 4 4 4 1\nTYPE F F F U\nWIDTH 2\nHEIGHT 2\nPOINTS 4\nDATA ascii\n"
+          "0 0 1 5\n1 0 1 5\n0 1 1 5\n1 1 1 5\n");
+  RangeImage image = read_organized_pcd(p.string(), nullptr);
+  EXPECT_EQ(image.points.size(), 4u);
+  EXPECT_TRUE(image.colors.empty());
 }
 
 TEST(LoadInputs, EmptyAndUnknownInputsAreClearErrors) {

@@ -211,6 +211,37 @@ TEST(MeshIo, GarbledPlyFilesAreInputErrors) {
   }
 }
 
+TEST(MeshIo, PlyHeaderWordsOpenMeshWouldReadOtherwiseAreInputErrors) {
+  // Found by tests/fuzz/inputs_fuzzer: OpenMesh reads the PLY header word by
+  // word, so a keyword after the format's version started a property before
+  // any element, which it appended to an element that does not exist (SEGV).
+  const fs::path dir = scratch("ply_header_words");
+  const std::string body =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
+      "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  struct Case {
+    std::string name, bytes, expect;
+  };
+  const std::vector<Case> cases = {
+      {"word_after_version.ply", "ply\nformat ascii 1.0 property uchar red\n" + body,
+       "line 2: expected 'format FORMAT 1.0'"},
+      {"glued_version.ply", "ply\nformat ascii 1property uchar red\n" + body, "line 2"},
+      {"format_not_second.ply", "ply\ncomment x\nformat ascii 1.0\n" + body, "right after 'ply'"},
+      {"keyword_in_obj_info.ply", "ply\nformat ascii 1.0\nobj_info end_header\n" + body,
+       "obj_info holds a PLY keyword"},
+      {"long_element.ply", "ply\nformat ascii 1.0\nelement vertex 3 property\n" + body.substr(17),
+       "line 3: expected 'element NAME COUNT'"},
+  };
+  for (const Case& c : cases) {
+    spit(dir / c.name, c.bytes);
+    const std::string message = error_of((dir / c.name).string());
+    EXPECT_NE(message.find((dir / c.name).string()), std::string::npos) << c.name << ": " << message;
+    EXPECT_NE(message.find(c.expect), std::string::npos) << c.name << ": " << message;
+  }
+  spit(dir / "fine.ply", "ply\nformat ascii 1.0\ncomment element property end_header\n" + body);
+  EXPECT_EQ(try_read(dir / "fine.ply"), Outcome::read);
+}
+
 TEST(MeshIo, EveryTruncationOfABinaryPlyIsAnInputError) {
   const fs::path dir = scratch("truncated_ply");
   write_mesh((dir / "whole.ply").string(), small_mesh());
@@ -282,6 +313,43 @@ TEST(MeshIo, TruncatedVtpIsAnInputError) {
   for (std::size_t size = 0; size < data_end; size += 1 + size / 8) {
     spit(dir / "cut.vtp", whole.substr(0, size));
     EXPECT_EQ(try_read(dir / "cut.vtp"), Outcome::input_error) << "cut at byte " << size;
+  }
+}
+
+TEST(MeshIo, VtpCountsTheFileCannotHoldAreInputErrors) {
+  // Found by tests/fuzz/inputs_fuzzer: VTK allocates by the XML's counts
+  // before reading data (NumberOfPoints="400000000" asked for 4.8 GB) and
+  // loops once per component over attribute names (a NumberOfComponents of
+  // 2^31 hung for minutes). Both are now checked against the file's size.
+  const fs::path dir = scratch("vtp_counts");
+  write_mesh((dir / "whole.vtp").string(), small_mesh());
+  const std::string whole = slurp(dir / "whole.vtp");
+  auto edited = [&](const std::string& from, const std::string& to) {
+    std::string s = whole;
+    const std::size_t at = s.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) s.replace(at, from.size(), to);
+    return s;
+  };
+  struct Case {
+    std::string name, bytes, expect;
+  };
+  const std::vector<Case> cases = {
+      {"points.vtp", edited("NumberOfPoints=\"5\"", "NumberOfPoints=\"400000000\""),
+       "Piece NumberOfPoints=400000000: more values than a file of"},
+      {"polys.vtp", edited("NumberOfPolys=\"4\"", "NumberOfPolys=\"1000000000\""),
+       "Piece NumberOfPolys=1000000000"},
+      {"components.vtp",
+       edited("NumberOfComponents=\"3\"", "NumberOfComponents=\"34444444444444444444444444\""),
+       "expected 1 to 10000"},
+      {"many_components.vtp", edited("NumberOfComponents=\"3\"", "NumberOfComponents=\"9000\""),
+       "5 x 9000"},
+  };
+  for (const Case& c : cases) {
+    spit(dir / c.name, c.bytes);
+    const std::string message = error_of((dir / c.name).string());
+    EXPECT_NE(message.find((dir / c.name).string()), std::string::npos) << c.name << ": " << message;
+    EXPECT_NE(message.find(c.expect), std::string::npos) << c.name << ": " << message;
   }
 }
 
