@@ -63,6 +63,22 @@ const char* kTinyGrid =
     "0 0 0\n1 0 0\n2 0 0\n0 1 0\n1 1 0.5\n"
     "1 0\n1 1\n1 2\n1 3\n1 4\n0\n";
 
+// A bad range-grid file: its name, its text and what its error must say.
+struct GridCase {
+  std::string name, text, expect;
+};
+
+// Each file gives an InputError naming the file and the expected text.
+void expect_range_grid_errors(const std::vector<GridCase>& cases) {
+  for (const GridCase& c : cases) {
+    fs::path p = scratch(c.name + ".ply");
+    spit(p, c.text);
+    std::string message = input_error([&] { read_range_grid_ply(p.string()); });
+    EXPECT_NE(message.find(p.string()), std::string::npos) << c.name << ": " << message;
+    EXPECT_NE(message.find(c.expect), std::string::npos) << c.name << ": " << message;
+  }
+}
+
 }  // namespace
 
 TEST(RangeGrid, ReadsTheLatticeWithHoles) {
@@ -96,10 +112,7 @@ TEST(RangeGrid, BinaryRoundTripIsExact) {
 
 TEST(RangeGrid, BadFilesNameTheFileAndTheElement) {
   const std::string good = kTinyGrid;
-  struct Case {
-    std::string name, text, expect;
-  };
-  std::vector<Case> cases = {
+  std::vector<GridCase> cases = {
       {"magic", "plx\n" + good.substr(4), "first line"},
       {"no_end", good.substr(0, good.find("end_header")), "end_header"},
       {"no_cols", [&] { std::string s = good; s.erase(s.find("obj_info num_cols 3\n"), 20); return s; }(),
@@ -115,13 +128,7 @@ TEST(RangeGrid, BadFilesNameTheFileAndTheElement) {
       {"indented_obj_info", [&] { std::string s = good; s.insert(s.find("obj_info num_rows"), " "); return s; }(),
        "starts with blanks"},
   };
-  for (const Case& c : cases) {
-    fs::path p = scratch(c.name + ".ply");
-    spit(p, c.text);
-    std::string message = input_error([&] { read_range_grid_ply(p.string()); });
-    EXPECT_NE(message.find(p.string()), std::string::npos) << c.name << ": " << message;
-    EXPECT_NE(message.find(c.expect), std::string::npos) << c.name << ": " << message;
-  }
+  expect_range_grid_errors(cases);
 }
 
 TEST(RangeGrid, TruncatedBinaryFilesAreErrorsAtEveryLength) {
@@ -185,10 +192,7 @@ TEST(RangeGrid, BinaryIndicesAndVertexCountsAreChecked) {
   std::string more_ascii = kTinyGrid;
   more_ascii.replace(more_ascii.find("vertex 5"), 8, "vertex 7");
   more_ascii.insert(more_ascii.find("1 0\n1 1\n"), "2 1 0\n3 3 3\n");
-  struct Case {
-    std::string name, text, expect;
-  };
-  const std::vector<Case> cases = {
+  const std::vector<GridCase> cases = {
       {"negative_index", binary_grid("5", 5, -1), "cell 4 has a vertex index outside [0, 5)"},
       {"index_past_end", binary_grid("5", 5, 5), "cell 4 has a vertex index outside [0, 5)"},
       {"more_vertices", binary_grid("7", 7, 4), "more than the 6 range_grid cells"},
@@ -200,13 +204,7 @@ TEST(RangeGrid, BinaryIndicesAndVertexCountsAreChecked) {
       // vertices in file order; found while reading PCL for the cases above.
       {"full_grid_out_of_order", full_grid("1 5\n1 4\n1 3\n1 2\n1 1\n1 0\n"), "does not name vertex 0"},
   };
-  for (const Case& c : cases) {
-    fs::path p = scratch(c.name + ".ply");
-    spit(p, c.text);
-    std::string message = input_error([&] { read_range_grid_ply(p.string()); });
-    EXPECT_NE(message.find(p.string()), std::string::npos) << c.name << ": " << message;
-    EXPECT_NE(message.find(c.expect), std::string::npos) << c.name << ": " << message;
-  }
+  expect_range_grid_errors(cases);
 }
 
 TEST(Conf, MissingScanIsNamedWithItsLine) {
