@@ -79,6 +79,21 @@ std::string error_of(const std::string& path) {
   return "(no error)";
 }
 
+// A bad mesh file: its name, its bytes and what read_mesh's error must say.
+struct BadFile {
+  std::string name, bytes, expect;
+};
+
+// Each file, written into dir, gives an InputError naming it and the expected text.
+void expect_read_errors(const fs::path& dir, const std::vector<BadFile>& files) {
+  for (const BadFile& f : files) {
+    spit(dir / f.name, f.bytes);
+    const std::string message = error_of((dir / f.name).string());
+    EXPECT_NE(message.find((dir / f.name).string()), std::string::npos) << f.name << ": " << message;
+    EXPECT_NE(message.find(f.expect), std::string::npos) << f.name << ": " << message;
+  }
+}
+
 void expect_same_positions(const TriangleMesh& a, const TriangleMesh& b) {
   ASSERT_EQ(a.positions.size(), b.positions.size());
   for (std::size_t i = 0; i < a.positions.size(); ++i)
@@ -219,10 +234,7 @@ TEST(MeshIo, PlyHeaderWordsOpenMeshWouldReadOtherwiseAreInputErrors) {
   const std::string body =
       "element vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
       "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-  struct Case {
-    std::string name, bytes, expect;
-  };
-  const std::vector<Case> cases = {
+  const std::vector<BadFile> cases = {
       {"word_after_version.ply", "ply\nformat ascii 1.0 property uchar red\n" + body,
        "line 2: expected 'format FORMAT 1.0'"},
       {"glued_version.ply", "ply\nformat ascii 1property uchar red\n" + body, "line 2"},
@@ -232,12 +244,7 @@ TEST(MeshIo, PlyHeaderWordsOpenMeshWouldReadOtherwiseAreInputErrors) {
       {"long_element.ply", "ply\nformat ascii 1.0\nelement vertex 3 property\n" + body.substr(17),
        "line 3: expected 'element NAME COUNT'"},
   };
-  for (const Case& c : cases) {
-    spit(dir / c.name, c.bytes);
-    const std::string message = error_of((dir / c.name).string());
-    EXPECT_NE(message.find((dir / c.name).string()), std::string::npos) << c.name << ": " << message;
-    EXPECT_NE(message.find(c.expect), std::string::npos) << c.name << ": " << message;
-  }
+  expect_read_errors(dir, cases);
   spit(dir / "fine.ply", "ply\nformat ascii 1.0\ncomment element property end_header\n" + body);
   EXPECT_EQ(try_read(dir / "fine.ply"), Outcome::read);
 }
@@ -331,10 +338,7 @@ TEST(MeshIo, VtpCountsTheFileCannotHoldAreInputErrors) {
     if (at != std::string::npos) s.replace(at, from.size(), to);
     return s;
   };
-  struct Case {
-    std::string name, bytes, expect;
-  };
-  const std::vector<Case> cases = {
+  const std::vector<BadFile> cases = {
       {"points.vtp", edited("NumberOfPoints=\"5\"", "NumberOfPoints=\"400000000\""),
        "Piece NumberOfPoints=400000000: more values than a file of"},
       {"polys.vtp", edited("NumberOfPolys=\"4\"", "NumberOfPolys=\"1000000000\""),
@@ -345,12 +349,7 @@ TEST(MeshIo, VtpCountsTheFileCannotHoldAreInputErrors) {
       {"many_components.vtp", edited("NumberOfComponents=\"3\"", "NumberOfComponents=\"9000\""),
        "5 x 9000"},
   };
-  for (const Case& c : cases) {
-    spit(dir / c.name, c.bytes);
-    const std::string message = error_of((dir / c.name).string());
-    EXPECT_NE(message.find((dir / c.name).string()), std::string::npos) << c.name << ": " << message;
-    EXPECT_NE(message.find(c.expect), std::string::npos) << c.name << ": " << message;
-  }
+  expect_read_errors(dir, cases);
 }
 
 TEST(MeshIo, FailedWritesLeaveNoFileBehind) {
