@@ -4,9 +4,11 @@
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
 
+#include <utility>
+
 namespace scan2lod::bench {
 
-TimedModel build_model_timed(const OrientedPoints& points, int resolution) {
+TimedModel build_model_timed(const OrientedPoints& points, int resolution, bool clusters) {
   TimedModel t;
   ReconstructOptions options;
   options.resolution = resolution;
@@ -14,11 +16,19 @@ TimedModel build_model_timed(const OrientedPoints& points, int resolution) {
   t.reconstruction = reconstruct(points, options);
   t.reconstruct_seconds = seconds_since(start);
   start = Clock::now();
-  t.model.tree = build_mc_octree(t.reconstruction);
+  McOctree tree = build_mc_octree(t.reconstruction);
   t.octree_seconds = seconds_since(start);
   start = Clock::now();
-  t.model.lod = number_nodes(t.model.tree);
+  LodArray lod = number_nodes(tree);
+  t.model = model_from_octree(std::move(tree), std::move(lod));
   t.numbering_seconds = seconds_since(start);
+  if (clusters) {
+    start = Clock::now();
+    ClusterOptions cluster_options;
+    cluster_options.threads = options.threads;
+    add_cluster_hierarchy(&t.model, t.reconstruction.mesh, /*shares_vertices=*/true, cluster_options);
+    t.cluster_seconds = seconds_since(start);
+  }
   return t;
 }
 

@@ -616,11 +616,12 @@ void print_scaling_table(const std::vector<Case>& cases) {
 }
 
 // The LOD model build over R, one child per run: values are the seconds of
-// reconstruct + octree + numbering, then of each, then the model's counts.
+// reconstruct + octree + numbering + clusters, then of each, then the model's
+// counts, then the cluster hierarchy's seconds.
 struct ModelBuildCase {
   int resolution = 0;
   std::vector<Outcome> runs;  // empty: skipped
-  enum Value { total, reconstruct, octree, numbering, nodes, expansions, triangles };
+  enum Value { total, reconstruct, octree, numbering, nodes, expansions, triangles, clusters };
   double median(Value v) const {
     std::vector<double> x;
     for (const Outcome& o : runs) x.push_back(o.values[v]);
@@ -634,8 +635,9 @@ void print_model_scaling_table(const std::vector<ModelBuildCase>& builds) {
     if (!all_ok(b.runs)) continue;
     using V = ModelBuildCase::Value;
     rows.push_back({b.resolution,
-                    {b.median(V::reconstruct), b.median(V::octree) , b.median(V::numbering),
-                     b.median(V::octree) + b.median(V::numbering), b.median(V::total), peak_mib(b.runs),
+                    {b.median(V::reconstruct), b.median(V::octree) , b.median(V::numbering), b.median(V::clusters),
+                     b.median(V::octree) + b.median(V::numbering) + b.median(V::clusters), b.median(V::total),
+                     peak_mib(b.runs),
                      b.median(V::nodes), b.median(V::expansions), b.median(V::triangles)}});
   }
   for (const ModelBuildCase& b : builds)
@@ -652,7 +654,8 @@ void print_model_scaling_table(const std::vector<ModelBuildCase>& builds) {
   print_scaling({{"`reconstruct()` s", "reconstruct seconds", 2, ""},
                  {"`build_mc_octree()` s", "octree seconds", 2, ""},
                  {"`number_nodes()` s", "numbering seconds", 2, ""},
-                 {"**model build** s (octree + numbering)", "model build seconds", 2, ""},
+                 {"`add_cluster_hierarchy()` s", "cluster seconds", 2, ""},
+                 {"**model build** s (octree + numbering + clusters)", "model build seconds", 2, ""},
                  {"points → model s", "points → model seconds", 2, ""},
                  {"peak MiB", "build peak MiB", 0, ""},
                  {"octree nodes", "nodes", 0, ""},
@@ -734,7 +737,9 @@ void print_notes(const std::vector<Case>& cases, const std::vector<ModelBuildCas
   if (std::any_of(builds.begin(), builds.end(), [](const ModelBuildCase& b) { return !b.runs.empty(); }))
     std::printf("- LOD model build: as `scan2lod build` makes it (`bench/model_build.h`): `reconstruct()`, "
                 "then `build_mc_octree(reconstruction)` (coarse corners signed by the distance to the "
-                "finished mesh, its field built inside that call) and `number_nodes()`, each timed; one "
+                "finished mesh, its field built inside that call), `number_nodes()` and "
+                "`add_cluster_hierarchy()` over the reconstruction's mesh (default `ClusterOptions`, all "
+                "cores), each timed; one "
                 "child per run, repeated like the cases above when the whole took under %s s. Peak MiB is "
                 "that child's, so it includes the reconstruction's.\n",
                 fixed(s.repeat_under, 0).c_str());
@@ -816,7 +821,7 @@ void print_report(const std::vector<Case>& cases, const std::vector<ModelBuildCa
   print_cases_table(cases);
   std::printf("\n## Scaling of scan2lod reconstruct()\n\n");
   print_scaling_table(cases);
-  std::printf("\n## Scaling of the LOD model build (`scan2lod build`: reconstruct, octree, numbering)\n\n");
+  std::printf("\n## Scaling of the LOD model build (`scan2lod build`: reconstruct, octree, numbering, clusters)\n\n");
   print_model_scaling_table(builds);
   std::printf("\n## Notes\n\n");
   print_notes(cases, builds, s, info);
@@ -1027,15 +1032,15 @@ int main(int argc, char** argv) {
         [&](int) {
           const TimedModel t = build_model_timed(points, R);
           return Values{t.reconstruct_seconds + t.model_seconds(), t.reconstruct_seconds, t.octree_seconds,
-                        t.numbering_seconds, double(t.model.tree.size()), double(t.model.lod.full()),
-                        double(t.reconstruction.mesh.triangles.size()), 0};
+                        t.numbering_seconds, double(t.model.octree->tree.size()), double(t.model.octree->lod.full()),
+                        double(t.reconstruction.mesh.triangles.size()), t.cluster_seconds};
         },
         s.runs, s.repeat_under, s.timeout,
         [](int run, const Outcome& o) {
           std::fprintf(stderr, "  run %-3d %s, peak %.0f MiB\n", run + 1,
                        o.status == Outcome::ok
-                           ? format("reconstruct %.2f s, octree %.2f s, numbering %.2f s", o.values[1],
-                                    o.values[2], o.values[3]).c_str()
+                           ? format("reconstruct %.2f s, octree %.2f s, numbering %.2f s, clusters %.2f s",
+                                    o.values[1], o.values[2], o.values[3], o.values[7]).c_str()
                            : o.message.c_str(),
                        o.peak_mib);
         });

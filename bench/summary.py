@@ -4,8 +4,10 @@
 Reads bench/REPORT.md (reconstruction) and bench/lod/REPORT.md (LOD), both
 written by the benchmark programs, and writes a short markdown section:
 scan2lod against the best peer for reconstruction time and fidelity and, per
-level, for LOD extraction time and fidelity, with each report's date, machine
-and source revision.
+level, for LOD extraction time and fidelity, then the cluster hierarchy's
+uniform cuts against meshopt_simplify and the most faithful peer (when the LOD
+report has them; older reports do not), with each report's date, machine and
+source revision.
 
     bench/summary.py                       print the section
     bench/summary.py --readme README.md    rewrite it in place, between
@@ -276,6 +278,40 @@ def lod_section(report):
     return out, model_text, sorted(unfinished)
 
 
+def cluster_section(report):
+    """The cluster hierarchy's uniform cuts against meshopt_simplify and the
+    best peer, from the table under 'Cluster hierarchy beside the octree', and
+    its build, storage and selection figures; ([], "") for a report from
+    before the cluster hierarchy."""
+    try:
+        facts = report.table("Cluster hierarchy", ["cluster hierarchy", "value"])
+        cuts = report.table("Cluster hierarchy", ["budget", "cut triangles", "clusters"])
+    except ReportError:
+        return [], ""
+    out = []
+    for r in cuts:
+        own = number(r["cluster cut"])
+        if own is None:
+            continue
+        simplify = number(r.get("meshopt_simplify", ""))
+        # The most faithful peer and the ratio to it, as the report computed them from unrounded errors.
+        best_name, to_best = plain(r["most faithful peer"]), number(r["cut / it"])
+        best_error = number(r.get(best_name, ""))
+        best = (f"{best_name}: {best_error:.4f} | {ratio_words(to_best)}"
+                if to_best is not None and best_error is not None else "— | —")
+        out.append(f"| {r['budget']} | {plain(r['cut triangles'])} | {own:.4f} | "
+                   f"{'—' if simplify is None else f'{simplify:.4f}'} | "
+                   f"{plain(r['cut / meshopt_simplify'])} | {best} |")
+    value = {plain(r["cluster hierarchy"]): plain(r["value"]) for r in facts}
+    def find(start):
+        return next((v for k, v in value.items() if k.startswith(start)), "—")
+    line = (f"Cluster hierarchy: build {find('build alone / ')} a whole-mesh `meshopt_simplify` to 1 %, "
+            f"stored triangles {find('stored triangles').split('= ')[-1]} the full mesh's, coarsest cut "
+            f"{find('coarsest cut')} triangles, view-dependent selection {find('view-dependent selection')} ms "
+            f"(median; slowest camera).")
+    return out, line
+
+
 def summary(reconstruction_path, lod_path):
     recon = Report(reconstruction_path)
     lod = Report(lod_path)
@@ -313,6 +349,18 @@ def summary(reconstruction_path, lod_path):
             "|---:|---:|---:|---|---|---:|---|---|"]
     out += lod_rows
     out.append("")
+    cluster_rows, cluster_line = cluster_section(lod)
+    if cluster_rows:
+        out += ["The cluster hierarchy's uniform cuts at triangle budgets, against `meshopt_simplify` and the most "
+                "faithful peer at the cut's count (error as above):",
+                "",
+                "| budget | triangles | cluster cut error | meshopt_simplify | cut / meshopt_simplify "
+                "| most faithful peer | the cut's error against it |",
+                "|---:|---:|---:|---:|---:|---|---|"]
+        out += cluster_rows
+        out.append("")
+        out.append(cluster_line)
+        out.append("")
     unfinished = recon_unfinished + lod_unfinished
     if unfinished:
         out.append("Did not finish (rows of their own in the reports): " + "; ".join(unfinished) + ".")

@@ -1,11 +1,15 @@
-// scan2lod build: inputs -> reconstruction -> marching-cube octree -> LOD
-// array -> .mco model (seed 003 §5-6), in one run.
+// scan2lod build: inputs -> reconstruction -> LOD structures -> .mco model,
+// in one run: the prioritized marching-cube octree (Lee 2007) and the cluster
+// hierarchy (Cignoni et al. 2005), or either alone.
 #include "acquisition/load_inputs.h"
 #include "cli/commands.h"
 #include "cli/reconstruct_flags.h"
+#include "io/mesh_file.h"
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
 #include "lod/model_file.h"
+
+#include "core/progress.h"
 
 #include <chrono>
 #include <cstdio>
@@ -21,6 +25,7 @@ void add_build_command(CLI::App& app) {
     ReconstructFlags flags;
     bool verbose = false;
     LodMetric metric = LodMetric::kDeviation;
+    std::string structure = "both";
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
@@ -37,6 +42,11 @@ void add_build_command(CLI::App& app) {
           std::map<std::string, LodMetric>{{"deviation", LodMetric::kDeviation}, {"area", LodMetric::kAreaDifference}},
           CLI::ignore_case))
       ->default_str("deviation");
+  cmd->add_option("--structure", args->structure,
+                  "LOD structures to build: clusters (the cluster hierarchy), octree (the marching-cube octree) or "
+                  "both. A mesh input's own triangles are the clusters' full detail.")
+      ->check(CLI::IsMember({"clusters", "octree", "both"}, CLI::ignore_case))
+      ->default_str("both");
   cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each reconstruction stage");
   cmd->callback([args] {
     using clock = std::chrono::steady_clock;
@@ -46,21 +56,46 @@ void add_build_command(CLI::App& app) {
     check_model_output(args->output);
     AcquisitionOptions acquisition;
     acquisition.threads = options.threads;
-    const OrientedPoints points = load_oriented_points(args->inputs, acquisition);
+    const bool want_octree = args->structure != "clusters", want_clusters = args->structure != "octree";
+    // A single mesh input keeps its own triangles for the cluster hierarchy.
+    AcquisitionReport report;
+    const OrientedPoints points = load_oriented_points(args->inputs, acquisition, &report);
+    const bool mesh_input = report.meshes == 1 && report.files.size() == 1;
     const double read_seconds = since(start);
 
     auto stage = clock::now();
-    Reconstruction r = reconstruct(points, options);
-    require_surface(args->inputs, r, options.resolution);
+    Reconstruction r;
+    if (want_octree || !mesh_input) {
+      r = reconstruct(points, options);
+      require_surface(args->inputs, r, options.resolution);
+    }
     const double reconstruct_seconds = since(stage);
 
     stage = clock::now();
     LodModel model;
-    OctreeOptions octree;
-    octree.metric = args->metric;
-    model.tree = build_mc_octree(r, octree);
-    model.lod = number_nodes(model.tree);
+    if (want_octree) {
+      OctreeOptions octree;
+      octree.metric = args->metric;
+      McOctree tree = build_mc_octree(r, octree);
+      LodArray lod = number_nodes(tree);
+      model = model_from_octree(std::move(tree), std::move(lod));
+    }
     const double octree_seconds = since(stage);
+
+    stage = clock::now();
+    if (want_clusters) {
+      Progress bar("clusters", 1000);
+      ClusterOptions clusters;
+      clusters.threads = options.threads;
+      clusters.progress = [&bar, done = std::size_t(0)](double share) mutable {
+        const std::size_t now = std::size_t(share * 1000);
+        if (now > done) bar.advance(now - done), done = now;
+      };
+      if (mesh_input) add_cluster_hierarchy(&model, read_mesh(args->inputs[0]), false, clusters);
+      else add_cluster_hierarchy(&model, r.mesh, want_octree, clusters);
+      bar.finish();
+    }
+    const double cluster_seconds = since(stage);
 
     stage = clock::now();
     save_model(args->output, model);
@@ -72,13 +107,20 @@ void add_build_command(CLI::App& app) {
                   "pieces and holes %.3f s, attributes %.3f s\n",
                   s.seconds_index, s.seconds_distances, s.seconds_emit, s.seconds_cleanup, s.seconds_attributes);
     }
-    std::size_t leaves = 0;
-    for (std::size_t n = 0; n < model.tree.size(); ++n) leaves += model.tree.is_leaf(n);
-    std::printf("%zu points, %zu leaves, %zu nodes, %zu expansions, %lld triangles at 100%%, %.2f s "
-                "(read %.2f s, reconstruct %.2f s, octree %.2f s, write %.2f s) -> %s\n",
-                r.stats.points, leaves, model.tree.size(), model.lod.full(),
-                static_cast<long long>(model.lod.accumulated.back()), since(start), read_seconds,
-                reconstruct_seconds, octree_seconds, write_seconds, args->output.c_str());
+    std::printf("%zu points, %zu vertices", r.stats.points, model.vertices.size());
+    if (model.has(LodStructure::kOctree)) {
+      const OctreeSummary o = describe_octree(model);
+      std::printf(", octree: %zu nodes, %zu expansions, %lld triangles at 100%%", o.nodes, o.expansions,
+                  static_cast<long long>(o.full_triangles));
+    }
+    if (model.has(LodStructure::kClusters)) {
+      const ClusterSummary c = describe_clusters(model);
+      std::printf(", clusters: %zu in %d levels, %lld triangles at 100%%", c.clusters, c.levels,
+                  static_cast<long long>(c.full_triangles));
+    }
+    std::printf(", %.2f s (read %.2f s, reconstruct %.2f s, octree %.2f s, clusters %.2f s, write %.2f s) -> %s\n",
+                since(start), read_seconds, reconstruct_seconds, octree_seconds, cluster_seconds, write_seconds,
+                args->output.c_str());
   });
 }
 

@@ -1,10 +1,10 @@
-// scan2lod extract: one mesh out of a .mco model, taken by reference
-// (seed 003 §6.1-6.2) at a priority chosen by percent, triangle budget or
-// priority number.
+// scan2lod extract: one mesh out of a .mco model, taken by reference from
+// either LOD structure (lod/lod_model.h): by percent, triangle budget,
+// object-space error, camera, or (octree) priority number.
 #include "cli/commands.h"
 #include "core/error.h"
 #include "io/mesh_file.h"
-#include "lod/extract.h"
+#include "lod/lod_model.h"
 #include "lod/model_file.h"
 
 #include <nlohmann/json.hpp>
@@ -12,34 +12,76 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
+#include <sstream>
 
 namespace scan2lod::cli {
+namespace {
+
+// "EX,EY,EZ,TX,TY,TZ,UX,UY,UZ" -> camera; throws InputError naming --camera.
+CameraView parse_camera(const std::string& text) {
+  std::vector<float> v;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      std::size_t used = 0;
+      v.push_back(std::stof(item, &used));
+      if (used != item.size() || !std::isfinite(v.back())) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw InputError("", "--camera needs 9 numbers EX,EY,EZ,TX,TY,TZ,UX,UY,UZ; '" + item + "' is not a number");
+    }
+  }
+  if (v.size() != 9)
+    throw InputError("", "--camera needs 9 numbers EX,EY,EZ,TX,TY,TZ,UX,UY,UZ, got " + std::to_string(v.size()));
+  CameraView c;
+  c.eye = Vec3f(v[0], v[1], v[2]);
+  c.target = Vec3f(v[3], v[4], v[5]);
+  c.up = Vec3f(v[6], v[7], v[8]);
+  return c;
+}
+
+}  // namespace
 
 void add_extract_command(CLI::App& app) {
   struct Args {
-    std::string model, output;
-    double percent = 0;
-    long long triangles = 0;
-    long long priority = 0;
+    std::string model, output, structure, camera;
+    double percent = 0, error = 0, fov = 45, pixel_error = 1;
+    long long triangles = 0, priority = 0;
+    int height = 1080;
     bool json = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("extract", "One level of detail of a .mco model -> mesh");
   cmd->add_option("model", args->model, "Model written by scan2lod build (.mco)")->required();
   cmd->add_option("-o,--output", args->output, "Output mesh (.ply .obj .stl .off .vtp)")->required();
-  CLI::Option* percent =
-      cmd->add_option("--percent", args->percent, "The first P % of the LOD array (0 to 100; 100: full detail)");
+  cmd->add_option("--structure", args->structure,
+                  "clusters or octree (default: clusters when the model has them)")
+      ->check(CLI::IsMember({"clusters", "octree"}, CLI::ignore_case));
+  CLI::Option* percent = cmd->add_option(
+      "--percent", args->percent,
+      "0 to 100: octree, the first P % of the LOD array; clusters, P % of the full triangle count");
   CLI::Option* triangles =
       cmd->add_option("--triangles", args->triangles, "The finest level with at most T triangles");
+  CLI::Option* error = cmd->add_option("--error", args->error,
+                                       "Clusters: the cut at this object-space error (model units)");
+  CLI::Option* camera = cmd->add_option("--camera", args->camera,
+                                        "Clusters: the cut seen from EX,EY,EZ looking at TX,TY,TZ with up UX,UY,UZ");
+  cmd->add_option("--fov", args->fov, "With --camera: vertical field of view in degrees")->default_val(45);
+  cmd->add_option("--height", args->height, "With --camera: viewport height in pixels")->default_val(1080);
+  cmd->add_option("--pixel-error", args->pixel_error, "With --camera: largest error on screen, in pixels")
+      ->default_val(1);
   CLI::Option* priority =
-      cmd->add_option("--priority", args->priority, "The level after N expansions (0: the root's mesh)");
+      cmd->add_option("--priority", args->priority, "Octree: the level after N expansions (0: the root's mesh)");
   cmd->add_flag("--json", args->json,
-                "Print {\"priority\", \"triangles\", \"vertices\", \"extract_seconds\"} as JSON");
-  cmd->callback([args, percent, triangles, priority] {
-    const int given = int(percent->count() > 0) + int(triangles->count() > 0) + int(priority->count() > 0);
+                "Print {\"structure\", \"triangles\", \"vertices\", \"clusters\", \"priority\", \"error\", "
+                "\"select_seconds\", \"extract_seconds\"} as JSON");
+  cmd->callback([args, percent, triangles, error, camera, priority] {
+    const int given = int(percent->count() > 0) + int(triangles->count() > 0) + int(error->count() > 0) +
+                      int(camera->count() > 0) + int(priority->count() > 0);
     if (given != 1)
-      throw InputError("", "extract needs exactly one of --percent, --triangles and --priority, got " +
+      throw InputError("", "extract needs exactly one of --percent, --triangles, --error, --camera and --priority, got " +
                                std::to_string(given));
     if (percent->count() && !(args->percent >= 0 && args->percent <= 100))
       throw InputError("", "--percent must be between 0 and 100, got " + percent->as<std::string>());
@@ -47,40 +89,65 @@ void add_extract_command(CLI::App& app) {
       throw InputError("", "--triangles must not be negative, got " + std::to_string(args->triangles));
     if (priority->count() && args->priority < 0)
       throw InputError("", "--priority must not be negative, got " + std::to_string(args->priority));
+    if (error->count() && !(args->error >= 0 && std::isfinite(args->error)))
+      throw InputError("", "--error must be a finite number >= 0, got " + error->as<std::string>());
+    if (!(args->fov > 0 && args->fov < 180) || args->height < 1 || !(args->pixel_error > 0))
+      throw InputError("", "--fov must be in (0, 180), --height >= 1 and --pixel-error > 0");
+    LevelRequest request;
+    if (percent->count()) request = LevelRequest::at_percent(args->percent);
+    else if (triangles->count()) request = LevelRequest::at_triangles(args->triangles);
+    else if (error->count()) request = LevelRequest::at_error(args->error);
+    else if (priority->count()) request = LevelRequest::at_priority(std::size_t(args->priority));
+    else {
+      CameraView view = parse_camera(args->camera);
+      view.fov_degrees = float(args->fov);
+      view.height = args->height;
+      request = LevelRequest::for_camera(view, args->pixel_error);
+    }
     check_mesh_output(args->output);
 
     const LodModel model = load_model(args->model);
-    std::size_t p;
-    if (percent->count()) {
-      p = priority_for_percent(model.lod, args->percent);
-    } else if (triangles->count()) {
-      p = priority_for_triangles(model.lod, args->triangles);
-    } else {
-      if (std::size_t(args->priority) > model.lod.full())
-        throw InputError(args->model, "--priority " + std::to_string(args->priority) + " is past the model's " +
-                                          std::to_string(model.lod.full()) + " expansions");
-      p = std::size_t(args->priority);
+    // A priority number is the octree's own: it picks the octree when no structure is named.
+    const LodStructure structure = !args->structure.empty()
+                                       ? (args->structure == "octree" ? LodStructure::kOctree : LodStructure::kClusters)
+                                   : priority->count() ? LodStructure::kOctree
+                                                       : default_structure(model);
+    require_structure(model, structure, args->model);
+    LevelExtractor extractor(model, structure);
+    LevelCut cut;
+    try {
+      cut = extractor.extract(request);
+    } catch (const InputError& e) {
+      throw InputError(args->model, e.what());
     }
-
     const auto start = std::chrono::steady_clock::now();
-    std::vector<std::uint8_t> scratch;
-    std::vector<Triangle> tris;
-    extract_lod(model.tree, model.lod, p, &scratch, &tris);
-    const TriangleMesh mesh = compact_lod(model.tree, tris);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const TriangleMesh mesh = compact_level(model, cut.triangles);
+    const double compact_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     write_mesh(args->output, mesh);
 
     if (args->json) {
-      const nlohmann::ordered_json j = {{"priority", p},
-                                {"triangles", mesh.triangles.size()},
-                                {"vertices", mesh.positions.size()},
-                                {"extract_seconds", seconds}};
+      nlohmann::ordered_json j = {{"structure", structure_name(structure)},
+                                  {"triangles", mesh.triangles.size()},
+                                  {"vertices", mesh.positions.size()}};
+      if (structure == LodStructure::kClusters) {
+        j["clusters"] = cut.clusters;
+        j["error"] = cut.error;
+      } else {
+        j["priority"] = cut.priority;
+      }
+      j["percent"] = cut.percent;
+      j["select_seconds"] = cut.select_seconds;
+      j["extract_seconds"] = cut.extract_seconds + compact_seconds;
       std::printf("%s\n", j.dump(2).c_str());
+    } else if (structure == LodStructure::kClusters) {
+      std::printf("clusters: %zu clusters, %zu triangles (%.1f %%), %zu vertices, error %.3g, selected in %.3f ms, "
+                  "extracted in %.2f ms -> %s\n",
+                  cut.clusters, mesh.triangles.size(), cut.percent, mesh.positions.size(), cut.error,
+                  cut.select_seconds * 1e3, (cut.extract_seconds + compact_seconds) * 1e3, args->output.c_str());
     } else {
-      const double share = model.lod.full() ? 100.0 * double(p) / double(model.lod.full()) : 100.0;
-      std::printf("priority %zu of %zu (%.1f %%), %zu triangles, %zu vertices, extracted in %.2f ms -> %s\n", p,
-                  model.lod.full(), share, mesh.triangles.size(), mesh.positions.size(), seconds * 1e3,
-                  args->output.c_str());
+      std::printf("octree: priority %zu (%.1f %%), %zu triangles, %zu vertices, extracted in %.2f ms -> %s\n",
+                  cut.priority, cut.percent, mesh.triangles.size(), mesh.positions.size(),
+                  (cut.extract_seconds + compact_seconds) * 1e3, args->output.c_str());
     }
   });
 }

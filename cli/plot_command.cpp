@@ -1,5 +1,7 @@
-// scan2lod plot: the LOD graphs of a .mco model (seed 003 Figs. 6.6-6.8) as
-// VTK charts in one PNG, plus error against triangles given a reference mesh.
+// scan2lod plot: the LOD graphs of a .mco model as VTK charts in one PNG (the
+// octree's: seed 003 Figs. 6.6-6.8; the cluster hierarchy's: error, clusters
+// and vertices against triangles), plus error against triangles given a
+// reference mesh.
 #include "cli/commands.h"
 #include "io/mesh_file.h"
 #include "lod/model_file.h"
@@ -16,6 +18,7 @@ namespace scan2lod::cli {
 void add_plot_command(CLI::App& app) {
   struct Args {
     std::string model, output, reference, percents = "1,2,5,10,20,30,40,50,60,70,80,90,100", size = "520x400";
+    std::string structure;
     std::size_t samples = 20000;
     bool linear = false;
   };
@@ -29,7 +32,11 @@ void add_plot_command(CLI::App& app) {
   cmd->add_option("--samples", args->samples, "Surface samples per direction and level for --reference")
       ->capture_default_str();
   cmd->add_option("--size", args->size, "Pixels per chart, WIDTHxHEIGHT")->capture_default_str();
-  cmd->add_flag("--linear", args->linear, "The LOD metric chart on a linear axis (default: log)");
+  cmd->add_flag("--linear", args->linear, "The LOD metric (octree) or error (clusters) chart on a linear axis "
+                                          "(default: log)");
+  cmd->add_option("--structure", args->structure,
+                  "LOD structure to plot: clusters or octree (default: clusters when the model has them)")
+      ->check(CLI::IsMember({"clusters", "octree"}));
   cmd->callback([args] {
     PlotOptions options;
     parse_size(args->size, "--size", &options.chart_width, &options.chart_height);
@@ -37,20 +44,31 @@ void add_plot_command(CLI::App& app) {
     const std::vector<double> percents = parse_percent_list(args->percents, "--percent");
     check_png_output(args->output);
     const LodModel model = load_model(args->model);  // file errors first, then the display
+    const LodStructure structure = choose_structure(model, args->structure, args->model);
     const TriangleMesh reference = args->reference.empty() ? TriangleMesh{} : read_mesh(args->reference);
     require_display("plot");
     std::vector<LevelError> errors;
     if (!args->reference.empty()) {
-      errors = level_errors(model, reference, percents, args->samples);
-      std::printf("%6s %10s %10s %12s %12s\n", "LOD %", "priority", "triangles", "to ref %", "from ref %");
-      for (const LevelError& e : errors)
-        std::printf("%6g %10zu %10zu %12.4f %12.4f\n", e.percent, e.priority, e.triangles, e.mean_to_reference,
-                    e.mean_from_reference);
+      errors = level_errors(model, structure, reference, percents, args->samples);
+      const bool octree = structure == LodStructure::kOctree;
+      std::printf("%6s %10s %10s %12s %12s\n", "LOD %", octree ? "priority" : "error", "triangles", "to ref %",
+                  "from ref %");
+      for (const LevelError& e : errors) {
+        if (octree)
+          std::printf("%6g %10zu %10zu %12.4f %12.4f\n", e.percent, e.priority, e.triangles, e.mean_to_reference,
+                      e.mean_from_reference);
+        else
+          std::printf("%6g %10.4g %10zu %12.4f %12.4f\n", e.percent, e.error, e.triangles, e.mean_to_reference,
+                      e.mean_from_reference);
+      }
     }
-    const PlotPicture p = write_lod_plots(model, errors, options, args->output);
-    std::printf("%zu charts (%zu priorities, %lld triangles at full detail), %dx%d pixels -> %s\n", p.charts.size(),
-                model.lod.full(), model.lod.accumulated.empty() ? 0LL : (long long)model.lod.accumulated.back(),
-                p.width, p.height, args->output.c_str());
+    const PlotPicture p = write_lod_plots(model, structure, errors, options, args->output);
+    if (structure == LodStructure::kOctree)
+      std::printf("%zu charts (octree: %zu priorities, %lld triangles at full detail), %dx%d pixels -> %s\n",
+                  p.charts.size(), p.priorities, (long long)p.full_triangles, p.width, p.height, args->output.c_str());
+    else
+      std::printf("%zu charts (clusters: %lld triangles at full detail), %dx%d pixels -> %s\n", p.charts.size(),
+                  (long long)p.full_triangles, p.width, p.height, args->output.c_str());
   });
 }
 

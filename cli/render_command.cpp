@@ -1,7 +1,9 @@
-// scan2lod render: levels of a .mco model off-screen into one PNG montage, the
-// layout of the seed's Fig. 6.3 (wireframe beside shaded, one row per level).
+// scan2lod render: levels of a .mco model (of its cluster hierarchy or its
+// octree, --structure) off-screen into one PNG montage, the layout of the
+// seed's Fig. 6.3 (wireframe beside shaded, one row per level).
 #include "cli/commands.h"
 #include "core/error.h"
+#include "lod/lod_model.h"
 #include "lod/model_file.h"
 #include "visualize/levels.h"
 #include "visualize/montage.h"
@@ -15,15 +17,21 @@ namespace scan2lod::cli {
 
 void add_render_command(CLI::App& app) {
   struct Args {
-    std::string model, output, percents = "100,80,60,40,20", size = "400x400", mode = "both";
+    std::string model, output, percents = "100,80,60,40,20", size = "400x400", mode = "both", structure;
     double azimuth = 0, elevation = 0;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("render", "Levels of a .mco model -> one PNG montage (off-screen)");
   cmd->add_option("model", args->model, "Model written by scan2lod build (.mco)")->required();
   cmd->add_option("-o,--output", args->output, "Output picture (.png)")->required();
-  cmd->add_option("--percent", args->percents, "Levels as percentages of the LOD array, comma-separated")
+  cmd->add_option("--percent", args->percents,
+                  "Levels as percentages (of the LOD array for the octree, of the full-detail triangles for the "
+                  "clusters), comma-separated")
       ->capture_default_str();
+  cmd->add_option("--structure", args->structure,
+                  "LOD structure to take the levels from: clusters or octree (default: clusters when the model "
+                  "has them)")
+      ->check(CLI::IsMember({"clusters", "octree"}));
   cmd->add_option("--size", args->size, "Pixels per panel, WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--mode", args->mode, "shaded, wireframe, or both (wireframe beside shaded per level)")
       ->capture_default_str();
@@ -38,13 +46,17 @@ void add_render_command(CLI::App& app) {
     options.elevation = args->elevation;
     check_png_output(args->output);
     const LodModel model = load_model(args->model);  // file errors first, then the display
+    const LodStructure structure = choose_structure(model, args->structure, args->model);
     require_display("render");
-    const Montage m = render_montage(model, percents, options, args->output);
-    std::printf("%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
+    const Montage m = render_montage(model, structure, percents, options, args->output);
+    const bool octree = structure == LodStructure::kOctree;
+    if (octree) std::printf("%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
+    else std::printf("%6s %12s %10s %10s %10s\n", "LOD %", "error", "clusters", "triangles", "vertices");
     const std::size_t step = options.mode == RenderMode::both ? 2 : 1;
     for (std::size_t i = 0; i < m.panels.size(); i += step) {
       const MontagePanel& p = m.panels[i];
-      std::printf("%6g %10zu %10zu %10zu\n", p.percent, p.priority, p.triangles, p.vertices);
+      if (octree) std::printf("%6g %10zu %10zu %10zu\n", p.percent, p.priority, p.triangles, p.vertices);
+      else std::printf("%6g %12.6g %10zu %10zu %10zu\n", p.percent, p.error, p.clusters, p.triangles, p.vertices);
     }
     std::printf("%zu panels, %dx%d pixels -> %s\n", m.panels.size(), m.width, m.height, args->output.c_str());
   });

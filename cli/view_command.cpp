@@ -3,6 +3,7 @@
 // slider moves and key presses, then it exits.
 #include "cli/commands.h"
 #include "core/error.h"
+#include "visualize/levels.h"
 #include "visualize/montage.h"
 #include "visualize/png_output.h"
 #include "visualize/viewer.h"
@@ -17,7 +18,7 @@ namespace scan2lod::cli {
 void add_view_command(CLI::App& app) {
   struct Args {
     std::vector<std::string> inputs;
-    std::string size = "1200x800", screenshot = "scan2lod_view.png", script;
+    std::string size = "1200x800", screenshot = "scan2lod_view.png", script, structure;
     double percent = 100, compare = 20;
     bool offscreen = false;
   };
@@ -26,14 +27,21 @@ void add_view_command(CLI::App& app) {
   cmd->add_option("inputs", args->inputs,
                   "A .mco model, a mesh (.ply .obj .off .stl .vtp), or a scan set (.conf, range-grid PLYs, PCDs)")
       ->required();
-  cmd->add_option("--percent", args->percent, "First level shown (% of the LOD array)")->capture_default_str();
+  cmd->add_option("--percent", args->percent,
+                  "First level shown (% of the LOD array for the octree, of the full-detail triangles for the "
+                  "clusters)")
+      ->capture_default_str();
+  cmd->add_option("--structure", args->structure,
+                  "A model's LOD structure to show: clusters (keys c, f, l: camera cut, freeze, DAG levels) or "
+                  "octree (key o: cells); default: clusters when the model has them")
+      ->check(CLI::IsMember({"clusters", "octree"}));
   cmd->add_option("--compare", args->compare, "Level of the split view's right half (key v)")->capture_default_str();
   cmd->add_option("--size", args->size, "Window pixels, WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--screenshot", args->screenshot, "Where key s saves (NAME_2.png, ... once it exists)")
       ->capture_default_str();
   cmd->add_option("--script", args->script,
                   "Run commands from FILE instead of waiting for a user, print the state after each, and exit "
-                  "(percent P | triangles T | slider V | key KEY | screenshot PATH | print)");
+                  "(percent P | triangles T | slider V | key KEY | orbit DEGREES | zoom FACTOR | screenshot PATH | print)");
   cmd->add_flag("--offscreen", args->offscreen, "Render without showing a window (implied by --script)");
   cmd->callback([args] {
     ViewerOptions options;
@@ -53,6 +61,9 @@ void add_view_command(CLI::App& app) {
     options.screenshot = args->screenshot;
     options.offscreen = args->offscreen || !args->script.empty();
     ViewerInput input = load_viewer_input(args->inputs);  // file errors first, then the display
+    if (input.model) options.structure = choose_structure(*input.model, args->structure, input.source);
+    else if (!args->structure.empty())
+      throw InputError(input.source, "--structure applies to a .mco model, not to a mesh or a scan set");
     require_display("view");
     Viewer viewer(std::move(input), options);
     if (!args->script.empty()) {

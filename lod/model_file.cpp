@@ -26,6 +26,7 @@ static_assert(sizeof(Vec3f) == 12 && sizeof(Triangle) == 12 && sizeof(Rgb) == 3 
                   sizeof(std::array<std::int32_t, kSubEdges>) == 4 * kSubEdges &&
                   sizeof(std::array<std::int32_t, 27>) == 108,
               "McOctree element types must be packed for the .mco layout");
+static_assert(sizeof(Cluster) == 16 && sizeof(GroupBound) == 20, "cluster records must be packed for the .mco layout");
 
 namespace {
 
@@ -138,45 +139,62 @@ std::uint64_t model_checksum(const void* data, std::size_t size, std::uint64_t s
 }
 
 std::vector<std::uint8_t> encode_model(const LodModel& model) {
-  const McOctree& t = model.tree;
-  std::vector<std::uint8_t> grid(kGridRecordBytes, 0);
-  for (int i = 0; i < 3; ++i) std::memcpy(grid.data() + 8 * i, &t.grid.origin[i], 8);
-  std::memcpy(grid.data() + 24, &t.grid.cube_size, 8);
-  const std::int32_t resolution = t.grid.resolution, depth = t.depth;
-  std::memcpy(grid.data() + 32, &resolution, 4);
-  std::memcpy(grid.data() + 36, &depth, 4);
-  put_u64(grid.data() + 40, std::uint64_t(t.mesh_vertices));
-  const std::uint64_t pinned = model.lod.pinned;
-
-  const OutSection sections[] = {
-      {fourcc("GRID"), std::uint32_t(kGridRecordBytes), 1, grid.data()},
-      out("KEYS", t.keys),
-      out("LEVL", t.levels),
-      out("PRNT", t.parents),
-      out("FCHD", t.first_child),
-      out("NCHD", t.child_counts),
-      out("CASE", t.cases),
-      out("EDGV", t.edge_vertices),
-      out("FTRI", t.first_triangle),
-      out("NTRI", t.triangle_counts),
-      out("METR", t.metrics),
-      out("BINS", t.boundary_inside),
-      out("SUBV", t.sub_edge_vertices),
-      out("CNTR", t.centre_vertices),
-      out("NBRS", t.neighbours),
-      out("TRIS", t.triangles),
-      out("PTRI", t.patch_triangles),
-      out("PGRP", t.patch_group_first),
-      out("PNDF", t.patch_needs_first),
-      out("PNDS", t.patch_needs),
-      out("POSN", t.positions),
-      out("NRML", t.normals),
-      out("COLR", t.colors),
-      out("LODO", model.lod.order),
-      out("LODA", model.lod.accumulated),
-      {fourcc("PINC"), 8, 1, &pinned, 0},  // 1.1, optional: older readers offer levels inside it
+  std::vector<OutSection> sections = {
+      out("POSN", model.vertices.positions),
+      out("NRML", model.vertices.normals),
+      out("COLR", model.vertices.colors),
   };
-  const std::size_t count = sizeof sections / sizeof sections[0];
+  std::vector<std::uint8_t> grid(kGridRecordBytes, 0);
+  std::uint64_t pinned = 0;
+  if (model.octree) {
+    const McOctree& t = model.octree->tree;
+    const LodArray& lod = model.octree->lod;
+    for (int i = 0; i < 3; ++i) std::memcpy(grid.data() + 8 * i, &t.grid.origin[i], 8);
+    std::memcpy(grid.data() + 24, &t.grid.cube_size, 8);
+    const std::int32_t resolution = t.grid.resolution, depth = t.depth;
+    std::memcpy(grid.data() + 32, &resolution, 4);
+    std::memcpy(grid.data() + 36, &depth, 4);
+    put_u64(grid.data() + 40, std::uint64_t(t.mesh_vertices));
+    pinned = lod.pinned;
+    const OutSection octree[] = {
+        {fourcc("GRID"), std::uint32_t(kGridRecordBytes), 1, grid.data()},
+        out("KEYS", t.keys),
+        out("LEVL", t.levels),
+        out("PRNT", t.parents),
+        out("FCHD", t.first_child),
+        out("NCHD", t.child_counts),
+        out("CASE", t.cases),
+        out("EDGV", t.edge_vertices),
+        out("FTRI", t.first_triangle),
+        out("NTRI", t.triangle_counts),
+        out("METR", t.metrics),
+        out("BINS", t.boundary_inside),
+        out("SUBV", t.sub_edge_vertices),
+        out("CNTR", t.centre_vertices),
+        out("NBRS", t.neighbours),
+        out("TRIS", t.triangles),
+        out("PTRI", t.patch_triangles),
+        out("PGRP", t.patch_group_first),
+        out("PNDF", t.patch_needs_first),
+        out("PNDS", t.patch_needs),
+        out("LODO", lod.order),
+        out("LODA", lod.accumulated),
+        {fourcc("PINC"), 8, 1, &pinned, 0},  // 1.1, optional: older readers offer levels inside it
+    };
+    sections.insert(sections.end(), std::begin(octree), std::end(octree));
+  }
+  std::uint64_t info[3] = {0, 0, 0};
+  if (model.clusters) {
+    const ClusterHierarchy& h = *model.clusters;
+    info[0] = std::uint64_t(h.full_triangles);
+    info[1] = model.cluster_vertex_first;
+    info[2] = model.cluster_vertex_count;
+    sections.push_back({fourcc("CINF"), 24, 1, info});
+    sections.push_back(out("CLUS", h.clusters));
+    sections.push_back(out("CTRI", h.triangles));
+    sections.push_back(out("CGRP", h.groups));
+  }
+  const std::size_t count = sections.size();
   const std::uint64_t directory_end = kHeaderBytes + kEntryBytes * count + 8;
   std::uint64_t length = directory_end;
   for (const OutSection& s : sections) length = padded(length + s.element_size * s.count);
@@ -252,6 +270,66 @@ LodModel load_model(const std::string& path) {
   return decode_model(bytes.get(), size, path);
 }
 
+namespace {
+
+// The cluster hierarchy's sections, checked so that no cut can read out of
+// bounds: ranges inside their arrays, groups that exist, finite bounds.
+template <class Section, class Read, class Bad>
+void decode_clusters(const std::uint8_t* data, Section section, Read read, Bad bad, std::size_t vertices,
+                     LodModel* model) {
+  const auto& info = section("CINF");
+  if (info.count != 1 || info.element_size != 24) bad("section 'CINF' must be one record of 24 bytes");
+  const std::uint64_t full = get_u64(data + info.offset), first = get_u64(data + info.offset + 8),
+                      count = get_u64(data + info.offset + 16);
+  if (first > vertices || count > vertices - first)
+    bad("the cluster hierarchy's vertices " + std::to_string(first) + "+" + std::to_string(count) + " lie outside the " +
+        std::to_string(vertices) + " vertices");
+  ClusterHierarchy h;
+  read("CLUS", &h.clusters);
+  read("CTRI", &h.triangles);
+  read("CGRP", &h.groups);
+  h.full_triangles = std::int64_t(std::min<std::uint64_t>(full, std::uint64_t(std::numeric_limits<std::int64_t>::max())));
+  if (h.clusters.empty()) bad("the cluster hierarchy has no clusters");
+  for (std::size_t i = 0; i < h.triangles.size(); ++i)
+    for (std::int32_t v : h.triangles[i])
+      if (v < std::int64_t(first) || std::uint64_t(v) >= first + count)
+        bad("section 'CTRI': triangle " + std::to_string(i) + " names vertex " + std::to_string(v) + " outside " +
+            std::to_string(first) + "+" + std::to_string(count));
+  for (std::size_t g = 0; g < h.groups.size(); ++g) {
+    const GroupBound& b = h.groups[g];
+    if (!(std::isfinite(b.center[0]) && std::isfinite(b.center[1]) && std::isfinite(b.center[2]) &&
+          std::isfinite(b.radius) && b.radius >= 0 && std::isfinite(b.error) && b.error > 0))
+      bad("section 'CGRP': group " + std::to_string(g) + " needs a finite centre, radius >= 0 and error > 0");
+  }
+  const std::int64_t groups = std::int64_t(h.groups.size());
+  std::int64_t level0 = 0;
+  for (std::size_t c = 0; c < h.clusters.size(); ++c) {
+    const Cluster& cl = h.clusters[c];
+    auto where = [c] { return "section 'CLUS': cluster " + std::to_string(c) + ": "; };
+    if (cl.triangle_count == 0) bad(where() + "no triangles");
+    if (std::uint64_t(cl.first_triangle) + cl.triangle_count > h.triangles.size())
+      bad(where() + "triangles " + std::to_string(cl.first_triangle) + "+" + std::to_string(cl.triangle_count) +
+          " past the " + std::to_string(h.triangles.size()) + " of 'CTRI'");
+    if (cl.own_group < -1 || cl.own_group >= groups || cl.parent_group < -1 || cl.parent_group >= groups)
+      bad(where() + "group " + std::to_string(cl.own_group) + " or " + std::to_string(cl.parent_group) + " of " +
+          std::to_string(groups));
+    if (cl.own_group >= 0 && cl.own_group == cl.parent_group) bad(where() + "its own group is its parent");
+    if ((cl.own_group < 0) != (cl.level == 0)) bad(where() + "level 0 and full detail (no own group) must agree");
+    if (cl.own_group >= 0 && cl.parent_group >= 0 &&
+        h.groups[std::size_t(cl.parent_group)].error < h.groups[std::size_t(cl.own_group)].error)
+      bad(where() + "its parent group's error is below its own");
+    if (cl.own_group < 0) level0 += cl.triangle_count;
+  }
+  if (level0 != h.full_triangles)
+    bad("the full-detail clusters hold " + std::to_string(level0) + " triangles, 'CINF' says " +
+        std::to_string(h.full_triangles));
+  model->clusters = std::move(h);
+  model->cluster_vertex_first = std::size_t(first);
+  model->cluster_vertex_count = std::size_t(count);
+}
+
+}  // namespace
+
 LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& source) {
   auto fail = [&](const std::string& what) { throw InputError(source, what); };
   auto bytes = [](std::uint64_t n) { return std::to_string(n) + (n == 1 ? " byte" : " bytes"); };
@@ -267,7 +345,7 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
     fail("written by a newer scan2lod (format " + std::to_string(major) + "." + std::to_string(minor) +
          ", this reads up to " + std::to_string(kModelFormatMajor) + ")");
   if (major == 0) fail("format version 0 was never written by scan2lod");
-  if (major < kModelFormatMajor)
+  if (major < 2)
     fail("written by an older scan2lod (format " + std::to_string(major) + "." + std::to_string(minor) +
          "), whose crack patching triangulated differently from this one's; rebuild the model with scan2lod build");
   const std::string format = "format " + std::to_string(major) + "." + std::to_string(minor);
@@ -321,7 +399,8 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
       fourcc("GRID"), fourcc("KEYS"), fourcc("LEVL"), fourcc("PRNT"), fourcc("FCHD"), fourcc("NCHD"), fourcc("CASE"),
       fourcc("EDGV"), fourcc("FTRI"), fourcc("NTRI"), fourcc("METR"), fourcc("BINS"), fourcc("SUBV"), fourcc("CNTR"),
       fourcc("NBRS"), fourcc("TRIS"), fourcc("PTRI"), fourcc("PGRP"), fourcc("PNDF"), fourcc("PNDS"), fourcc("POSN"),
-      fourcc("NRML"), fourcc("COLR"), fourcc("LODO"), fourcc("LODA"), fourcc("PINC")};
+      fourcc("NRML"), fourcc("COLR"), fourcc("LODO"), fourcc("LODA"), fourcc("PINC"), fourcc("CINF"), fourcc("CLUS"),
+      fourcc("CTRI"), fourcc("CGRP")};
   for (const Section& s : sections)
     if ((s.flags & kRequired) && std::find(std::begin(known), std::end(known), s.tag) == std::end(known))
       fail("needs section " + tag_name(s.tag) + ", which this scan2lod does not know (" + format + ", this reads " +
@@ -342,7 +421,26 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
   };
 
   LodModel model;
-  McOctree& t = model.tree;
+  read("POSN", &model.vertices.positions);
+  read("NRML", &model.vertices.normals);
+  read("COLR", &model.vertices.colors);
+  const std::size_t vertices = model.vertices.size();
+  constexpr std::size_t kMaxIndex = std::size_t(std::numeric_limits<std::int32_t>::max());
+  auto bad = [&](const std::string& what) { fail("inconsistent model: " + what); };
+  if (vertices > kMaxIndex) bad(std::to_string(vertices) + " vertices, more than 32-bit indices address");
+  if (!model.vertices.normals.empty() && model.vertices.normals.size() != vertices)
+    bad(std::to_string(model.vertices.normals.size()) + " normals for " + std::to_string(vertices) + " vertices");
+  if (!model.vertices.colors.empty() && model.vertices.colors.size() != vertices)
+    bad(std::to_string(model.vertices.colors.size()) + " colours for " + std::to_string(vertices) + " vertices");
+  const bool has_octree = major == 2 || by_tag.count(fourcc("GRID"));
+  const bool has_clusters = major >= 3 && by_tag.count(fourcc("CINF"));
+  if (!has_octree && !has_clusters) fail("holds no LOD structure: neither an octree ('GRID') nor clusters ('CINF')");
+  if (has_clusters) decode_clusters(data, section, read, bad, vertices, &model);
+  if (!has_octree) return model;
+
+  model.octree.emplace();
+  McOctree& t = model.octree->tree;
+  LodArray& octree_lod = model.octree->lod;
   {
     const Section& s = section("GRID");
     if (s.count != 1 || s.element_size < kGridRecordBytes)
@@ -376,22 +474,17 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
   read("PGRP", &t.patch_group_first);
   read("PNDF", &t.patch_needs_first);
   read("PNDS", &t.patch_needs);
-  read("POSN", &t.positions);
-  read("NRML", &t.normals);
-  read("COLR", &t.colors);
-  read("LODO", &model.lod.order);
-  read("LODA", &model.lod.accumulated);
+  read("LODO", &octree_lod.order);
+  read("LODA", &octree_lod.accumulated);
   if (by_tag.count(fourcc("PINC"))) {  // optional (added in 1.1): without it nothing is pinned
     std::vector<std::uint64_t> pinned;
     read("PINC", &pinned);
     if (pinned.size() != 1) fail("section 'PINC' must hold one count, not " + std::to_string(pinned.size()));
-    model.lod.pinned = std::size_t(std::min<std::uint64_t>(pinned[0], std::numeric_limits<std::size_t>::max()));
+    octree_lod.pinned = std::size_t(std::min<std::uint64_t>(pinned[0], std::numeric_limits<std::size_t>::max()));
   }
 
   // Contents: everything extraction indexes must be in range, and the tree a
   // tree, so that a crafted file cannot make it read out of bounds.
-  auto bad = [&](const std::string& what) { fail("inconsistent model: " + what); };
-  constexpr std::size_t kMaxIndex = std::size_t(std::numeric_limits<std::int32_t>::max());
   const std::size_t n = t.keys.size();
   if (n == 0) bad("the octree has no nodes");
   if (n > kMaxIndex) bad(std::to_string(n) + " nodes, more than 32-bit indices address");
@@ -413,14 +506,8 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
     bad("resolution " + std::to_string(t.grid.resolution) + " is not 2^depth for depth " + std::to_string(t.depth));
   if (!t.grid.origin.allFinite() || !std::isfinite(t.grid.cube_size) || !(t.grid.cube_size > 0))
     bad("the grid's origin and cube size must be finite, the cube size positive");
-  const std::size_t vertices = t.positions.size();
-  if (vertices > kMaxIndex) bad(std::to_string(vertices) + " vertices, more than 32-bit indices address");
   if (t.mesh_vertices > vertices)
     bad("mesh_vertices " + std::to_string(t.mesh_vertices) + " exceeds the " + std::to_string(vertices) + " vertices");
-  if (!t.normals.empty() && t.normals.size() != vertices)
-    bad(std::to_string(t.normals.size()) + " normals for " + std::to_string(vertices) + " vertices");
-  if (!t.colors.empty() && t.colors.size() != vertices)
-    bad(std::to_string(t.colors.size()) + " colours for " + std::to_string(vertices) + " vertices");
   if (t.triangles.size() > kMaxIndex) bad("more triangles than 32-bit indices address");
   auto check_triangles = [&](const char* tag, const std::vector<Triangle>& tris) {
     for (std::size_t i = 0; i < tris.size(); ++i)
@@ -543,7 +630,7 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
   }
 
   // The LOD array: every internal node once, parents first (§5.2).
-  const LodArray& lod = model.lod;
+  const LodArray& lod = octree_lod;
   if (lod.order.size() != internal)
     bad("the LOD array has " + std::to_string(lod.order.size()) + " entries for " + std::to_string(internal) +
         " internal nodes");

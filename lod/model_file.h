@@ -46,14 +46,24 @@
 // transition with several loops (one loop around the centre, lod/transition.h),
 // so a 1.x file's accumulation table no longer counts what extraction emits
 // and a reader rejects it.
+// Format 3.0 holds one or both LOD structures over one shared vertex array
+// (lod/lod_model.h): POSN, NRML and COLR always; the octree's sections above
+// when the model has an octree (GRID marks it); and the cluster hierarchy's
+// when it has one (CINF marks it), all required:
+//   CINF  1 record of 24 bytes: u64 full-detail triangles, u64 first vertex,
+//         u64 vertex count (the range of the shared vertices it indexes)
+//   CLUS  Cluster records of 16 bytes: u32 first triangle, u16 triangle count,
+//         u8 DAG level, u8 0, i32 own group, i32 parent group (-1: none)
+//   CTRI  i32[3] triangles, cluster by cluster
+//   CGRP  GroupBound records of 20 bytes: f32 centre[3], radius, error
+// A 2.x file (an octree alone) still loads.
 // A new array is a new tag (in encode_model, the known list, decode_model's
 // reads and its checks). When older readers can still draw the model without
 // it, the writer marks it optional and bumps the minor version; otherwise it is
 // required and the major version goes up.
 #pragma once
 
-#include "lod/lod_array.h"
-#include "lod/mc_octree.h"
+#include "lod/lod_model.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -62,12 +72,7 @@
 
 namespace scan2lod {
 
-struct LodModel {
-  McOctree tree;
-  LodArray lod;
-};
-
-constexpr std::uint32_t kModelFormatMajor = 2;
+constexpr std::uint32_t kModelFormatMajor = 3;
 constexpr std::uint32_t kModelFormatMinor = 0;
 
 // Writes `model` to `path` (extension .mco) through a temporary file renamed

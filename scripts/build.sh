@@ -18,7 +18,7 @@ packages=(
   libeigen3-dev liblz4-dev
   libpcl-dev libopen3d-dev libopenmesh-dev libflann-dev libvtk9-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
-  libmeshoptimizer-dev
+  libmeshoptimizer-dev libmetis-dev
   xvfb xauth libgl1-mesa-dri
 )
 
@@ -51,10 +51,12 @@ demo() {
   if [ -f "$reference" ]; then
     "$build_dir/bin/scan2lod" compare out/bunny.ply "$reference"
   fi
-  # The main job: the LOD model, its levels, and one level taken from it.
+  # The main job: the LOD model (cluster hierarchy and octree), its levels,
+  # and levels taken from it by budget, from each structure.
   "$build_dir/bin/scan2lod" build data/bunny/bun.conf -o out/bunny.mco --resolution 256
   "$build_dir/bin/scan2lod" info out/bunny.mco
-  "$build_dir/bin/scan2lod" extract out/bunny.mco --percent 20 -o out/bunny_20.ply
+  "$build_dir/bin/scan2lod" extract out/bunny.mco --triangles 20000 -o out/bunny_20k.ply
+  "$build_dir/bin/scan2lod" extract out/bunny.mco --structure octree --percent 20 -o out/bunny_20.ply
 }
 
 run_tests() {

@@ -37,8 +37,8 @@ TEST(LodCli, BuildPrintsAOneLineSummary) {
   const fs::path model = scratch() / "summary.mco";
   const CliRun r = run_cli("build " + kScans + " -o " + model.string() + " -r 32 --quiet");
   ASSERT_EQ(r.status, 0) << r.output;
-  for (const char* word : {"358808 points", "leaves", "nodes", "expansions", "triangles at 100%", "reconstruct",
-                           "octree"})
+  for (const char* word : {"358808 points", "nodes", "expansions", "triangles at 100%", "reconstruct", "octree",
+                           "clusters"})
     EXPECT_NE(r.output.find(word), std::string::npos) << word << " missing from: " << r.output;
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_GT(fs::file_size(model), 10000u);
@@ -85,7 +85,8 @@ TEST(LodCli, InfoAndExtractAgreeOnTheBunny) {
 
   // --percent 100 writes the full mesh that info counted.
   const fs::path out = scratch() / "full.ply";
-  const CliRun x = run_cli("extract " + model.string() + " --percent 100 -o " + out.string() + " --json", false);
+  const CliRun x =
+      run_cli("extract " + model.string() + " --structure octree --percent 100 -o " + out.string() + " --json", false);
   ASSERT_EQ(x.status, 0) << x.output;
   const nlohmann::json e = nlohmann::json::parse(x.output);
   for (const char* key : {"priority", "triangles", "vertices", "extract_seconds"})
@@ -101,7 +102,7 @@ TEST(LodCli, InfoAndExtractAgreeOnTheBunny) {
 
   // --triangles takes the finest level within the budget; --priority is exact.
   const std::size_t budget = fifth;
-  const CliRun t = run_cli("extract " + model.string() + " --triangles " + std::to_string(budget) + " -o " +
+  const CliRun t = run_cli("extract " + model.string() + " --structure octree --triangles " + std::to_string(budget) + " -o " +
                            (scratch() / "budget.obj").string() + " --json",
                        false);
   ASSERT_EQ(t.status, 0) << t.output;
@@ -115,13 +116,56 @@ TEST(LodCli, InfoAndExtractAgreeOnTheBunny) {
   EXPECT_LT(nlohmann::json::parse(p.output).at("triangles").get<std::size_t>(), 20u);
 
   // Without --json: a one-line summary and a table.
-  const CliRun plain = run_cli("extract " + model.string() + " --percent 20 -o " + (scratch() / "p20.ply").string());
+  const CliRun plain =
+      run_cli("extract " + model.string() + " --structure octree --percent 20 -o " + (scratch() / "p20.ply").string());
   ASSERT_EQ(plain.status, 0) << plain.output;
   EXPECT_NE(plain.output.find(std::to_string(fifth) + " triangles"), std::string::npos) << plain.output;
   const CliRun table = run_cli("info " + model.string());
   ASSERT_EQ(table.status, 0) << table.output;
   EXPECT_NE(table.output.find("LOD %"), std::string::npos) << table.output;
   EXPECT_NE(table.output.find(std::to_string(full)), std::string::npos) << table.output;
+}
+
+// The cluster hierarchy through the command line: the full cut is the
+// reconstruction the octree holds too, budgets, errors and cameras give cuts,
+// and --json reports clusters and selection time.
+TEST(LodCli, ClusterCutsByBudgetErrorAndCamera) {
+  const fs::path& model = bunny_model();
+  const CliRun info = run_cli("info " + model.string() + " --json", false);
+  ASSERT_EQ(info.status, 0) << info.output;
+  const nlohmann::json j = nlohmann::json::parse(info.output);
+  ASSERT_TRUE(j.contains("clusters")) << info.output;
+  const auto& c = j.at("clusters");
+  const std::size_t full = c.at("full_triangles").get<std::size_t>();
+  EXPECT_EQ(full, j.at("levels_of_detail")[0].at("triangles").get<std::size_t>()) << "both index the same mesh";
+  EXPECT_LE(c.at("coarsest_triangles").get<std::size_t>(), 256u);
+  EXPECT_LE(c.at("stored_triangles").get<double>(), 2.2 * double(full));
+
+  auto extract = [&](const std::string& args) {
+    const CliRun r = run_cli("extract " + model.string() + " " + args + " -o " + (scratch() / "c.ply").string() +
+                                 " --json",
+                             false);
+    EXPECT_EQ(r.status, 0) << args << ": " << r.output;
+    return nlohmann::json::parse(r.output);
+  };
+  const nlohmann::json all = extract("--percent 100");
+  EXPECT_EQ(all.at("structure").get<std::string>(), "clusters");
+  EXPECT_EQ(all.at("triangles").get<std::size_t>(), full);
+  for (const char* key : {"clusters", "select_seconds", "extract_seconds", "error"})
+    EXPECT_TRUE(all.contains(key)) << key;
+  const nlohmann::json budget = extract("--triangles 2000");
+  EXPECT_LE(budget.at("triangles").get<std::size_t>(), 2000u);
+  EXPECT_GT(budget.at("triangles").get<std::size_t>(), 200u);
+  // The budget's error threshold gives the same cut by --error.
+  char threshold[32];
+  std::snprintf(threshold, sizeof threshold, "%.9g", budget.at("error").get<double>() * (1 + 1e-6));
+  const nlohmann::json by_error = extract(std::string("--error ") + threshold);
+  EXPECT_EQ(by_error.at("triangles").get<std::size_t>(), budget.at("triangles").get<std::size_t>());
+  // Near the model the camera asks for more than far from it.
+  const nlohmann::json near = extract("--camera 0,0.1,0.3,0,0.1,0,0,1,0 --pixel-error 1");
+  const nlohmann::json far = extract("--camera 0,0.1,30,0,0.1,0,0,1,0 --pixel-error 1");
+  EXPECT_GT(near.at("triangles").get<std::size_t>(), far.at("triangles").get<std::size_t>());
+  EXPECT_LT(near.at("select_seconds").get<double>(), 0.01);
 }
 
 TEST(LodCli, BadInputsFailCleanlyAndWriteNothing) {
@@ -147,12 +191,18 @@ TEST(LodCli, BadInputsFailCleanlyAndWriteNothing) {
       {"extract " + (dir / "damaged.mco").string() + " --percent 50 -o " + out, "checksum mismatch in section"},
       {"extract " + (dir / "cut.mco").string() + " --percent 50 -o " + out, "truncated in section"},
       {"extract " + (dir / "mesh.ply").string() + " --percent 50 -o " + out, "not a scan2lod model"},
-      {"extract " + m + " --percent 10 --triangles 100 -o " + out, "exactly one of --percent, --triangles and --priority, got 2"},
-      {"extract " + m + " -o " + out, "exactly one of --percent, --triangles and --priority, got 0"},
+      {"extract " + m + " --percent 10 --triangles 100 -o " + out, "exactly one of --percent, --triangles, --error, --camera and --priority, got 2"},
+      {"extract " + m + " -o " + out, "exactly one of --percent, --triangles, --error, --camera and --priority, got 0"},
       {"extract " + m + " --percent 150 -o " + out, "--percent must be between 0 and 100, got 150"},
       {"extract " + m + " --percent=-1 -o " + out, "--percent must be between 0 and 100"},
       {"extract " + m + " --triangles=-5 -o " + out, "--triangles must not be negative"},
-      {"extract " + m + " --priority 99999999 -o " + out, "--priority 99999999 is past the model's"},
+      {"extract " + m + " --priority 99999999 -o " + out, "priority 99999999 is past the octree's"},
+      {"extract " + m + " --structure clusters --priority 3 -o " + out, "the cluster hierarchy has no priority numbers"},
+      {"extract " + m + " --structure octree --error 0.01 -o " + out, "not by error or camera"},
+      {"extract " + m + " --camera 1,2,3 -o " + out, "--camera needs 9 numbers"},
+      {"extract " + m + " --camera 0,0,1,0,0,0,0,1,x -o " + out, "'x' is not a number"},
+      {"extract " + m + " --error=-1 -o " + out, "--error must be a finite number >= 0"},
+      {"extract " + m + " --camera 0,0,1,0,0,0,0,1,0 --fov 200 -o " + out, "--fov must be in (0, 180)"},
       {"extract " + m + " --percent 50 -o " + (dir / "out.xyz").string(), ".xyz"},
       {"extract " + m + " --percent 50 -o " + (dir / "nowhere" / "out.ply").string(), "does not exist"},
       {"info " + (dir / "damaged.mco").string(), "damaged.mco: checksum mismatch"},

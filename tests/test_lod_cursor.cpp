@@ -4,6 +4,7 @@
 #include "lod/extract.h"
 #include "lod/lod_array.h"
 #include "lod/lod_cursor.h"
+#include "lod/lod_model.h"
 #include "lod/mc_octree.h"
 #include "lod/model_file.h"
 #include "reconstruct/marching_cubes.h"
@@ -15,6 +16,7 @@
 #include <open3d/geometry/TriangleMesh.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <random>
 #include <vector>
 
@@ -33,24 +35,34 @@ bool splits(int cell) {
   return offsets == 1 || offsets == 2;
 }
 
-const LodModel& bunny() {
+// The octree of a model (the cursor's structure): its tree and LOD array;
+// the vertices its index buffers name are the model's (model.vertices).
+const OctreeLod& octree_of(const LodModel& m) {
+  if (!m.octree) {
+    ADD_FAILURE() << "the model has no octree";
+    std::abort();
+  }
+  return *m.octree;
+}
+
+const LodModel& bunny_lod_model() {
   static const LodModel m = load_model(scan2lod::testing::bunny_model().string());
   return m;
 }
+const OctreeLod& bunny() { return octree_of(bunny_lod_model()); }
 
-const LodModel& torus() {
+const OctreeLod& torus() {
   static const LodModel m = [] {
     ReconstructOptions options;
     options.resolution = 32;
     const auto shape = open3d::geometry::TriangleMesh::CreateTorus(1.0, 0.4, 200, 80);
     const Reconstruction r =
         reconstruct(scan2lod::testing::scan_shape(scan2lod::testing::from_open3d(*shape)), options);
-    LodModel model;
-    model.tree = build_mc_octree(r);
-    model.lod = number_nodes(model.tree);
-    return model;
+    McOctree tree = build_mc_octree(r);
+    LodArray lod = number_nodes(tree);
+    return model_from_octree(std::move(tree), std::move(lod));
   }();
-  return m;
+  return octree_of(m);
 }
 
 std::vector<Triangle> sorted(std::vector<Triangle> t) {
@@ -87,7 +99,7 @@ std::size_t cut_size(const McOctree& tree, const LodArray& lod, std::size_t prio
 
 // What a move from `from` to the cursor's priority may have re-emitted: its
 // changes' children or selves and neighbours, or, rebuilt, the cut alone.
-void expect_cost(const LodModel& m, const LodCursor& cursor, std::size_t from, std::size_t to) {
+void expect_cost(const OctreeLod& m, const LodCursor& cursor, std::size_t from, std::size_t to) {
   const std::size_t changes = from > to ? from - to : to - from, emitted = cursor.emitted_nodes_last_move();
   EXPECT_LE(emitted, kMostPerChange * changes) << from << " -> " << to;
   if (cursor.rebuilt_last_move())
@@ -97,7 +109,7 @@ void expect_cost(const LodModel& m, const LodCursor& cursor, std::size_t from, s
 }
 
 // Moves a cursor to each target in turn and compares it with extract_lod.
-void expect_moves_match_extraction(const LodModel& m, const std::vector<std::size_t>& targets) {
+void expect_moves_match_extraction(const OctreeLod& m, const std::vector<std::size_t>& targets) {
   LodCursor cursor(m.tree, m.lod);
   std::vector<std::uint8_t> scratch;
   std::vector<Triangle> expected, live;
@@ -144,20 +156,29 @@ std::vector<std::size_t> random_targets(std::size_t full, std::uint32_t seed) {
 }  // namespace
 
 TEST(LodCursor, RandomMovesGiveExtractLodsTrianglesOnTheBunny) {
-  const LodModel& m = bunny();
+  const OctreeLod& m = bunny();
   ASSERT_GT(m.tree.patch_groups(), 0u);  // hole patches show and hide on the way
   expect_moves_match_extraction(m, random_targets(m.lod.full(), 1));
+  // In a model the tree keeps no vertices: the buffer indexes the model's.
+  EXPECT_TRUE(m.tree.positions.empty());
+  const std::size_t vertices = bunny_lod_model().vertices.size();
+  LodCursor cursor(m.tree, m.lod);
+  for (const std::size_t p : {m.lod.full(), m.lod.full() / 2, std::size_t(0)}) {
+    cursor.move_to(p);
+    for (const Triangle& t : cursor.buffer())
+      for (const std::int32_t v : t) ASSERT_TRUE(v >= 0 && std::size_t(v) < vertices) << v << " at " << p;
+  }
 }
 
 TEST(LodCursor, RandomMovesGiveExtractLodsTrianglesOnATorus) {
-  const LodModel& m = torus();
+  const OctreeLod& m = torus();
   expect_moves_match_extraction(m, random_targets(m.lod.full(), 2));
 }
 
 TEST(LodCursor, EveryStepUpAndDownFollowsTheAccumulationTable) {
   // One expansion at a time through the whole LOD array and back: each step's
   // count is the table's, and re-emits at most its children (or itself) and neighbours.
-  const LodModel& m = bunny();
+  const OctreeLod& m = bunny();
   const std::size_t full = m.lod.full();
   LodCursor cursor(m.tree, m.lod);
   std::vector<std::uint8_t> scratch;
@@ -179,7 +200,7 @@ TEST(LodCursor, EveryStepUpAndDownFollowsTheAccumulationTable) {
 }
 
 TEST(LodCursor, OneStepAtHalfReEmitsFarFewerNodesThanTheCut) {
-  const LodModel& m = bunny();
+  const OctreeLod& m = bunny();
   const std::size_t half = m.lod.full() / 2;
   LodCursor cursor(m.tree, m.lod);
   cursor.move_to(half);
@@ -202,7 +223,7 @@ TEST(LodCursor, OneStepAtHalfReEmitsFarFewerNodesThanTheCut) {
 
 TEST(LodCursor, AJumpAcrossTheArrayRebuildsTheCutOnce) {
   // From the root to full detail: every leaf once, not every change's neighbours.
-  const LodModel& m = bunny();
+  const OctreeLod& m = bunny();
   LodCursor cursor(m.tree, m.lod);
   EXPECT_EQ(cursor.priority(), 0u);
   EXPECT_EQ(cursor.triangles(), m.lod.accumulated[0]);

@@ -1,11 +1,13 @@
 // The .mco model file (lod/model_file.h): a saved model comes back exactly,
-// down to the triangles of every level of detail, and a truncated, damaged,
-// newer or crafted file ends in an InputError that says what is wrong, never
-// in a crash or an out-of-bounds read.
+// both LOD structures (the octree and the cluster hierarchy) down to the
+// triangles of every level of detail, and a truncated, damaged, newer, older
+// or crafted file ends in an InputError that says what is wrong, never in a
+// crash or an out-of-bounds read.
 #include "acquisition/load_inputs.h"
 #include "core/error.h"
 #include "io/mesh_file.h"
 #include "lod/extract.h"
+#include "lod/lod_model.h"
 #include "lod/model_file.h"
 #include "reconstruct/cube_table.h"
 #include "reconstruct/marching_cubes.h"
@@ -14,10 +16,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 
 using namespace scan2lod;
 namespace fs = std::filesystem;
@@ -30,13 +34,18 @@ const LodModel& bunny64() {
     ReconstructOptions options;
     options.resolution = 64;
     const Reconstruction r = reconstruct(points, options);
-    LodModel m;
-    m.tree = build_mc_octree(r);
-    m.lod = number_nodes(m.tree);
+    McOctree tree = build_mc_octree(r);
+    LodArray lod = number_nodes(tree);
+    // Both structures over one vertex array: the mesh is the octree's first vertices.
+    LodModel m = model_from_octree(std::move(tree), std::move(lod));
+    add_cluster_hierarchy(&m, r.mesh, true);
     return m;
   }();
   return model;
 }
+
+const OctreeLod& octree() { return *bunny64().octree; }
+const ClusterHierarchy& clusters() { return *bunny64().clusters; }
 
 const std::vector<std::uint8_t>& bunny64_bytes() {
   static const std::vector<std::uint8_t> bytes = encode_model(bunny64());
@@ -129,11 +138,60 @@ std::uint32_t tag(const char (&s)[5]) {
   return v;
 }
 
-std::vector<Triangle> extract(const LodModel& m, double percent) {
+// Where the section `t` is among a file's sections (its directory entry).
+std::size_t index_of(const std::vector<RawSection>& sections, std::uint32_t t) {
+  for (std::size_t i = 0; i < sections.size(); ++i)
+    if (sections[i].tag == t) return i;
+  ADD_FAILURE() << "no section " << std::string(reinterpret_cast<const char*>(&t), 4);
+  return 0;
+}
+std::size_t index_of(const std::vector<std::uint8_t>& b, std::uint32_t t) {
+  for (std::uint32_t i = 0; i < u32_at(b, 16); ++i)
+    if (u32_at(b, 40 + 48 * std::size_t(i)) == t) return i;
+  ADD_FAILURE() << "no section " << std::string(reinterpret_cast<const char*>(&t), 4);
+  return 0;
+}
+// A section's payload: [offset, offset + length).
+std::uint64_t payload_offset(const std::vector<std::uint8_t>& b, std::uint32_t t) {
+  return u64_at(b, 40 + 48 * index_of(b, t) + 24);
+}
+std::uint64_t payload_length(const std::vector<std::uint8_t>& b, std::uint32_t t) {
+  return u64_at(b, 40 + 48 * index_of(b, t) + 32);
+}
+
+std::vector<Triangle> extract(const OctreeLod& m, double percent) {
   std::vector<std::uint8_t> scratch;
   std::vector<Triangle> tris;
   extract_lod(m.tree, m.lod, priority_for_percent(m.lod, percent), &scratch, &tris);
   return tris;
+}
+
+// The triangles of a level through the face (lod/lod_model.h).
+std::vector<Triangle> level(const LodModel& m, LodStructure s, const LevelRequest& request) {
+  LevelExtractor extractor(m, s);
+  return extractor.extract(request).triangles;
+}
+
+bool same_clusters(const ClusterHierarchy& a, const ClusterHierarchy& b) {
+  if (a.clusters.size() != b.clusters.size() || a.groups.size() != b.groups.size()) return false;
+  for (std::size_t c = 0; c < a.clusters.size(); ++c) {
+    const Cluster &x = a.clusters[c], &y = b.clusters[c];
+    if (x.first_triangle != y.first_triangle || x.triangle_count != y.triangle_count || x.level != y.level ||
+        x.reserved != y.reserved || x.own_group != y.own_group || x.parent_group != y.parent_group)
+      return false;
+  }
+  for (std::size_t g = 0; g < a.groups.size(); ++g)  // bit for bit
+    if (std::memcmp(&a.groups[g], &b.groups[g], sizeof(GroupBound)) != 0) return false;
+  return a.triangles == b.triangles && a.full_triangles == b.full_triangles;
+}
+
+// A model's bytes with the header's major version replaced, its header and
+// whole-file checksums recomputed (the section checksums do not cover it).
+std::vector<std::uint8_t> with_major(std::vector<std::uint8_t> b, std::uint32_t major) {
+  set_u32(&b, 8, major);
+  set_u64(&b, 32, model_checksum(b.data(), 32));
+  set_u64(&b, b.size() - 8, model_checksum(b.data(), b.size() - 8));
+  return b;
 }
 
 }  // namespace
@@ -163,8 +221,9 @@ TEST(ModelFile, RoundTripKeepsEveryArrayAndEveryLevelOfDetail) {
       << "a temporary file was left behind";
   EXPECT_EQ(fs::file_size(path), bunny64_bytes().size());
   const LodModel l = load_model(path.string());
+  ASSERT_TRUE(l.octree && l.clusters);
 
-  const McOctree &a = m.tree, &b = l.tree;
+  const McOctree &a = m.octree->tree, &b = l.octree->tree;
   EXPECT_EQ(a.grid.origin, b.grid.origin);
   EXPECT_EQ(a.grid.cube_size, b.grid.cube_size);
   EXPECT_EQ(a.grid.resolution, b.grid.resolution);
@@ -189,20 +248,24 @@ TEST(ModelFile, RoundTripKeepsEveryArrayAndEveryLevelOfDetail) {
   EXPECT_EQ(a.patch_group_first, b.patch_group_first);
   EXPECT_EQ(a.patch_needs_first, b.patch_needs_first);
   EXPECT_EQ(a.patch_needs, b.patch_needs);
-  EXPECT_EQ(a.positions, b.positions);
-  EXPECT_EQ(a.normals, b.normals);
-  EXPECT_EQ(a.colors, b.colors);
-  EXPECT_EQ(m.lod.order, l.lod.order);
-  EXPECT_EQ(m.lod.accumulated, l.lod.accumulated);
-  EXPECT_GT(m.lod.pinned, 0u);
-  EXPECT_EQ(m.lod.pinned, l.lod.pinned);
+  // The tree's own vertex arrays stay empty in a model: its vertices are the model's.
+  EXPECT_TRUE(b.positions.empty() && b.normals.empty() && b.colors.empty());
+  EXPECT_FALSE(m.vertices.positions.empty());
+  EXPECT_EQ(m.vertices.positions, l.vertices.positions);
+  EXPECT_EQ(m.vertices.normals, l.vertices.normals);
+  EXPECT_EQ(m.vertices.colors, l.vertices.colors);
+  const LodArray &ma = m.octree->lod, &la = l.octree->lod;
+  EXPECT_EQ(ma.order, la.order);
+  EXPECT_EQ(ma.accumulated, la.accumulated);
+  EXPECT_GT(ma.pinned, 0u);
+  EXPECT_EQ(ma.pinned, la.pinned);
 
   for (double percent : {0.0, 1.0, 10.0, 50.0, 100.0}) {
-    const std::vector<Triangle> original = extract(m, percent), loaded = extract(l, percent);
+    const std::vector<Triangle> original = extract(*m.octree, percent), loaded = extract(*l.octree, percent);
     EXPECT_EQ(original, loaded) << percent << "%";
-    EXPECT_EQ(std::int64_t(loaded.size()), l.lod.accumulated[priority_for_percent(l.lod, percent)]) << percent << "%";
+    EXPECT_EQ(std::int64_t(loaded.size()), la.accumulated[priority_for_percent(la, percent)]) << percent << "%";
   }
-  EXPECT_GT(extract(l, 100).size(), 10000u);
+  EXPECT_GT(extract(*l.octree, 100).size(), 10000u);
   // Deterministic: the loaded model writes the same bytes.
   EXPECT_EQ(encode_model(l), bunny64_bytes());
 }
@@ -264,8 +327,7 @@ TEST(ModelFile, FlippedBytesAreCaughtByChecksums) {
       EXPECT_NE(error.find("checksum mismatch"), std::string::npos) << p << ": " << error;
   }
   // A flip inside a payload names its section.
-  const std::size_t keys_offset = std::size_t(u64_at(bytes, 40 + 48 * 1 + 24));
-  ASSERT_EQ(u32_at(bytes, 40 + 48 * 1), tag("KEYS"));
+  const std::size_t keys_offset = std::size_t(payload_offset(bytes, tag("KEYS")));
   bytes[keys_offset + 5] ^= 0x10;
   EXPECT_NE(error_of(bytes.data(), bytes.size()).find("checksum mismatch in section 'KEYS'"), std::string::npos);
 }
@@ -297,8 +359,9 @@ TEST(ModelFile, NewerMinorVersionsAddSectionsOldReadersSkip) {
   // A known section missing or twice.
   sections.erase(sections.begin() + 3);
   std::vector<RawSection> missing = sections, twice = sections;
-  missing.erase(missing.begin() + 2);
-  twice.push_back(twice[2]);
+  const std::size_t levl = index_of(sections, tag("LEVL"));
+  missing.erase(missing.begin() + std::ptrdiff_t(levl));
+  twice.push_back(twice[levl]);
   std::vector<std::uint8_t> b = join(missing, kModelFormatMajor, kModelFormatMinor);
   EXPECT_NE(error_of(b.data(), b.size()).find("missing section 'LEVL'"), std::string::npos) << error_of(b.data(), b.size());
   b = join(twice, kModelFormatMajor, kModelFormatMinor);
@@ -331,43 +394,44 @@ TEST(ModelFile, CraftedContentsAreRejectedBeforeExtraction) {
     std::function<void(LodModel&)> craft;
   };
   const LodModel& m = bunny64();
-  const std::int32_t n = std::int32_t(m.tree.size());
-  const std::int32_t vertices = std::int32_t(m.tree.positions.size());
+  const McOctree& tree = octree().tree;
+  const std::int32_t n = std::int32_t(tree.size());
+  const std::int32_t vertices = std::int32_t(m.vertices.size());
   std::int32_t leaf = 0;
-  while (!m.tree.is_leaf(std::size_t(leaf))) ++leaf;
+  while (!tree.is_leaf(std::size_t(leaf))) ++leaf;
   const std::vector<Case> cases = {
-      {"a per-node array one short", "'LEVL' has", [](LodModel& l) { l.tree.levels.pop_back(); }},
+      {"a per-node array one short", "'LEVL' has", [](LodModel& l) { l.octree->tree.levels.pop_back(); }},
       {"children past the nodes", "children", [n](LodModel& l) {
-         l.tree.first_child[1] = n - 1;
-         l.tree.child_counts[1] = 8;
+         l.octree->tree.first_child[1] = n - 1;
+         l.octree->tree.child_counts[1] = 8;
        }},
-      {"a parent out of range", "child 5 does not lie inside it", [n](LodModel& l) { l.tree.parents[5] = n + 100; }},
+      {"a parent out of range", "child 5 does not lie inside it", [n](LodModel& l) { l.octree->tree.parents[5] = n + 100; }},
       {"a triangle range past TRIS", "triangles", [](LodModel& l) {
-         l.tree.first_triangle.back() = std::int32_t(l.tree.triangles.size());
-         l.tree.triangle_counts.back() = 1;
+         l.octree->tree.first_triangle.back() = std::int32_t(l.octree->tree.triangles.size());
+         l.octree->tree.triangle_counts.back() = 1;
        }},
-      {"a triangle naming a missing vertex", "names vertex", [vertices](LodModel& l) { l.tree.triangles[7][1] = vertices; }},
+      {"a triangle naming a missing vertex", "names vertex", [vertices](LodModel& l) { l.octree->tree.triangles[7][1] = vertices; }},
       {"a negative vertex in a patch", "'PTRI'", [](LodModel& l) {
-         l.tree.patch_triangles.push_back({0, -3, 1});
+         l.octree->tree.patch_triangles.push_back({0, -3, 1});
        }},
-      {"an edge vertex out of range", "edge vertex", [vertices](LodModel& l) { l.tree.edge_vertices.back()[0] = vertices; }},
-      {"a neighbour out of range", "neighbour", [n](LodModel& l) { l.tree.neighbours[2][4] = n; }},
+      {"an edge vertex out of range", "edge vertex", [vertices](LodModel& l) { l.octree->tree.edge_vertices.back()[0] = vertices; }},
+      {"a neighbour out of range", "neighbour", [n](LodModel& l) { l.octree->tree.neighbours[2][4] = n; }},
       {"a crossing without a vertex", "without a vertex", [](LodModel& l) {
-         for (auto& s : l.tree.sub_edge_vertices) s.fill(-1);
+         for (auto& s : l.octree->tree.sub_edge_vertices) s.fill(-1);
        }},
-      {"a patch group past the patches", "'PGRP'", [](LodModel& l) { l.tree.patch_group_first.back() += 1; }},
+      {"a patch group past the patches", "'PGRP'", [](LodModel& l) { l.octree->tree.patch_group_first.back() += 1; }},
       {"a patch needing a missing node", "'PNDS' names node", [n](LodModel& l) {
-         l.tree.patch_needs.push_back(n);
-         l.tree.patch_needs_first.back() += 1;
+         l.octree->tree.patch_needs.push_back(n);
+         l.octree->tree.patch_needs_first.back() += 1;
        }},
-      {"normals for too few vertices", "normals", [](LodModel& l) { l.tree.normals.pop_back(); }},
-      {"a leaf in the LOD array", "not an internal node", [leaf](LodModel& l) { l.lod.order[3] = leaf; }},
-      {"a node expanded twice", "expands twice", [](LodModel& l) { l.lod.order[4] = l.lod.order[3]; }},
-      {"a child before its parent", "before its parent", [](LodModel& l) { std::swap(l.lod.order[1], l.lod.order.back()); }},
-      {"an accumulation table too short", "accumulation table", [](LodModel& l) { l.lod.accumulated.pop_back(); }},
-      {"a resolution that is not 2^depth", "resolution", [](LodModel& l) { l.tree.grid.resolution = 100; }},
-      {"mesh_vertices past the vertices", "mesh_vertices", [](LodModel& l) { l.tree.mesh_vertices = 1u << 30; }},
-      {"a pinned prefix past the LOD array", "pinned expansions", [](LodModel& l) { l.lod.pinned = l.lod.order.size() + 1; }},
+      {"normals for too few vertices", "normals", [](LodModel& l) { l.vertices.normals.pop_back(); }},
+      {"a leaf in the LOD array", "not an internal node", [leaf](LodModel& l) { l.octree->lod.order[3] = leaf; }},
+      {"a node expanded twice", "expands twice", [](LodModel& l) { l.octree->lod.order[4] = l.octree->lod.order[3]; }},
+      {"a child before its parent", "before its parent", [](LodModel& l) { std::swap(l.octree->lod.order[1], l.octree->lod.order.back()); }},
+      {"an accumulation table too short", "accumulation table", [](LodModel& l) { l.octree->lod.accumulated.pop_back(); }},
+      {"a resolution that is not 2^depth", "resolution", [](LodModel& l) { l.octree->tree.grid.resolution = 100; }},
+      {"mesh_vertices past the vertices", "mesh_vertices", [](LodModel& l) { l.octree->tree.mesh_vertices = 1u << 30; }},
+      {"a pinned prefix past the LOD array", "pinned expansions", [](LodModel& l) { l.octree->lod.pinned = l.octree->lod.order.size() + 1; }},
   };
   for (const Case& c : cases) {
     LodModel crafted = m;
@@ -379,13 +443,14 @@ TEST(ModelFile, CraftedContentsAreRejectedBeforeExtraction) {
   }
   // Huge counts are refused by the file's size, before any allocation.
   std::vector<RawSection> sections = split(bunny64_bytes());
-  sections[1].count = std::uint64_t(1) << 61;  // 2^64 bytes: overflows
+  sections[index_of(sections, tag("KEYS"))].count = std::uint64_t(1) << 61;  // 2^64 bytes: overflows
   std::vector<std::uint8_t> huge = join(sections, kModelFormatMajor, kModelFormatMinor);
   std::string error = error_of(huge.data(), huge.size());
   EXPECT_NE(error.find("section 'KEYS': 2305843009213693952 elements of 8 bytes"), std::string::npos) << error;
   huge = bunny64_bytes();
-  set_u64(&huge, 40 + 48 * 1 + 16, std::uint64_t(1) << 40);
-  set_u64(&huge, 40 + 48 * 1 + 32, std::uint64_t(1) << 43);
+  const std::size_t keys = 40 + 48 * index_of(huge, tag("KEYS"));
+  set_u64(&huge, keys + 16, std::uint64_t(1) << 40);
+  set_u64(&huge, keys + 32, std::uint64_t(1) << 43);
   const std::size_t directory = 48 * std::size_t(u32_at(huge, 16));
   set_u64(&huge, 40 + directory, model_checksum(huge.data() + 40, directory));
   error = error_of(huge.data(), huge.size());
@@ -421,7 +486,7 @@ TEST(ModelFile, WritesOnlyModelsIntoFoldersThatExist) {
   }
 }
 
-TEST(ModelFile, Format1FilesAreRejectedWithARebuildHint) {
+TEST(ModelFile, Format1FilesAreRejectedWithARebuildHintAndFormat2FilesLoad) {
   // 1.x transitions fanned every loop around the centre: their accumulation
   // tables do not count what this extraction emits.
   for (const std::uint32_t minor : {0u, 1u}) {
@@ -436,4 +501,232 @@ TEST(ModelFile, Format1FilesAreRejectedWithARebuildHint) {
       EXPECT_NE(error.find("rebuild the model"), std::string::npos) << error;
     }
   }
+}
+
+// (continued) A 2.x file held an octree alone, in the sections 3.0 still
+// writes for it: it loads, with the octree's vertices as the model's.
+TEST(ModelFile, Format2FilesOfAnOctreeStillLoad) {
+  LodModel octree_only = bunny64();
+  octree_only.clusters.reset();
+  octree_only.cluster_vertex_first = octree_only.cluster_vertex_count = 0;
+  const std::vector<std::uint8_t> current = encode_model(octree_only);
+  for (const std::uint32_t minor : {0u, 1u}) {
+    std::vector<std::uint8_t> old = with_major(current, 2);
+    set_u32(&old, 12, minor);
+    set_u64(&old, 32, model_checksum(old.data(), 32));
+    set_u64(&old, old.size() - 8, model_checksum(old.data(), old.size() - 8));
+    ASSERT_EQ(u32_at(old, 8), 2u);
+    LodModel l;
+    try {
+      l = decode_model(old.data(), old.size(), "old.mco");
+    } catch (const InputError& e) {
+      FAIL() << "a format 2." << minor << " file was refused: " << e.what();
+    }
+    ASSERT_TRUE(l.octree.has_value());
+    EXPECT_FALSE(l.clusters.has_value());
+    EXPECT_EQ(default_structure(l), LodStructure::kOctree);
+    EXPECT_EQ(l.vertices.positions, octree_only.vertices.positions);
+    EXPECT_EQ(l.vertices.normals, octree_only.vertices.normals);
+    for (double percent : {0.0, 25.0, 100.0})
+      EXPECT_EQ(extract(*l.octree, percent), extract(octree(), percent)) << percent << "%";
+    // Written again, it is a 3.0 file of the same model.
+    EXPECT_EQ(encode_model(l), current);
+  }
+  // 1.x is refused even when its sections are those of a good 2.x file.
+  const std::vector<std::uint8_t> one = with_major(current, 1);
+  EXPECT_NE(error_of(one.data(), one.size()).find("older scan2lod"), std::string::npos) << error_of(one.data(), one.size());
+}
+
+TEST(ModelFile, ClusterHierarchyRoundTrips) {
+  const LodModel& m = bunny64();
+  const ClusterHierarchy& h = clusters();
+  ASSERT_GT(h.levels(), 2);
+  ASSERT_GT(h.groups.size(), 10u);
+  EXPECT_EQ(m.cluster_vertex_first, 0u);  // it shares the octree's mesh vertices
+  EXPECT_GT(m.cluster_vertex_count, 0u);
+  EXPECT_LE(m.cluster_vertex_count, m.vertices.size());
+  const fs::path path = scratch() / "clusters.mco";
+  save_model(path.string(), m);
+  const LodModel l = load_model(path.string());
+  ASSERT_TRUE(l.clusters.has_value());
+  EXPECT_EQ(l.cluster_vertex_first, m.cluster_vertex_first);
+  EXPECT_EQ(l.cluster_vertex_count, m.cluster_vertex_count);
+  EXPECT_EQ(l.clusters->clusters.size(), h.clusters.size());
+  EXPECT_EQ(l.clusters->triangles, h.triangles);
+  EXPECT_EQ(l.clusters->groups.size(), h.groups.size());
+  EXPECT_EQ(l.clusters->full_triangles, h.full_triangles);
+  EXPECT_TRUE(same_clusters(*l.clusters, h));
+  EXPECT_EQ(l.clusters->levels(), h.levels());
+  EXPECT_EQ(default_structure(l), LodStructure::kClusters);
+  // Every kind of cluster level comes out the same.
+  CameraView camera;
+  const Aabb box = model_bounds(m);
+  camera.target = 0.5f * (box.min + box.max);
+  camera.eye = camera.target + Vec3f(0, 0, 2.5f * box.diagonal());
+  for (const LevelRequest& r :
+       {LevelRequest::at_percent(100), LevelRequest::at_percent(30), LevelRequest::at_percent(0),
+        LevelRequest::at_error(h.groups[h.groups.size() / 2].error), LevelRequest::at_triangles(h.full_triangles / 10),
+        LevelRequest::for_camera(camera, 1.0)})
+    EXPECT_EQ(level(l, LodStructure::kClusters, r), level(m, LodStructure::kClusters, r)) << int(r.kind);
+  EXPECT_EQ(std::int64_t(level(l, LodStructure::kClusters, LevelRequest::at_percent(100)).size()), h.full_triangles);
+
+  // A model of the cluster hierarchy alone (build --structure clusters) round-trips too.
+  LodModel alone = m;
+  alone.octree.reset();
+  const std::vector<std::uint8_t> bytes = encode_model(alone);
+  EXPECT_EQ(u32_at(bytes, 8), kModelFormatMajor);
+  const LodModel c = decode_model(bytes.data(), bytes.size(), "c.mco");
+  EXPECT_FALSE(c.octree.has_value());
+  ASSERT_TRUE(c.clusters.has_value());
+  EXPECT_TRUE(same_clusters(*c.clusters, h));
+  EXPECT_EQ(c.vertices.positions, m.vertices.positions);
+  EXPECT_EQ(encode_model(c), bytes);
+  // And one with neither is no model.
+  LodModel none = alone;
+  none.clusters.reset();
+  const std::vector<std::uint8_t> empty = encode_model(none);
+  EXPECT_NE(error_of(empty.data(), empty.size()).find("holds no LOD structure"), std::string::npos)
+      << error_of(empty.data(), empty.size());
+}
+
+TEST(ModelFile, ClusterSectionsTruncatedOrDamagedAreNamed) {
+  const std::vector<std::uint8_t>& bytes = bunny64_bytes();
+  // Cut inside a section: the message names it.
+  for (const char* name : {"CTRI", "CLUS", "CGRP", "CINF"}) {
+    const std::uint32_t t = tag(*reinterpret_cast<const char(*)[5]>(name));
+    const std::uint64_t offset = payload_offset(bytes, t), length = payload_length(bytes, t);
+    ASSERT_GT(length, 1u) << name;
+    for (const std::uint64_t cut : {offset + 1, offset + length / 2, offset + length - 1}) {
+      const std::string error = error_of(bytes.data(), std::size_t(cut));
+      EXPECT_NE(error.find("truncated in section '" + std::string(name) + "'"), std::string::npos)
+          << name << " cut at " << cut << ": " << error;
+    }
+  }
+  // A damaged byte in a cluster section: its checksum names it.
+  for (const char* name : {"CGRP", "CLUS", "CTRI", "CINF"}) {
+    const std::uint32_t t = tag(*reinterpret_cast<const char(*)[5]>(name));
+    const std::uint64_t offset = payload_offset(bytes, t), length = payload_length(bytes, t);
+    for (const std::uint64_t at : {offset, offset + length / 3, offset + length - 1}) {
+      std::vector<std::uint8_t> damaged = bytes;
+      damaged[std::size_t(at)] ^= 0x04;
+      const std::string error = error_of(damaged.data(), damaged.size());
+      EXPECT_NE(error.find("checksum mismatch in section '" + std::string(name) + "'"), std::string::npos)
+          << name << " at " << at << ": " << error;
+    }
+  }
+  // A required cluster section missing.
+  std::vector<RawSection> sections = split(bytes);
+  sections.erase(sections.begin() + std::ptrdiff_t(index_of(sections, tag("CTRI"))));
+  const std::vector<std::uint8_t> missing = join(sections, kModelFormatMajor, kModelFormatMinor);
+  EXPECT_NE(error_of(missing.data(), missing.size()).find("missing section 'CTRI'"), std::string::npos)
+      << error_of(missing.data(), missing.size());
+}
+
+TEST(ModelFile, CraftedClusterHierarchiesAreRejectedBeforeExtraction) {
+  // Encoded again, a crafted hierarchy has good checksums: its contents are checked.
+  struct Case {
+    std::string what, expect;
+    std::function<void(LodModel&)> craft;
+  };
+  const LodModel& m = bunny64();
+  const ClusterHierarchy& h = clusters();
+  const std::int64_t groups = std::int64_t(h.groups.size());
+  const std::size_t vertices = m.vertices.size(), range = m.cluster_vertex_count;
+  ASSERT_LT(range, vertices);  // the octree's extra vertices lie past the mesh's
+  // A cluster with both groups, for the error order.
+  std::size_t between = 0;
+  while (between < h.clusters.size() && (h.clusters[between].own_group < 0 || h.clusters[between].parent_group < 0))
+    ++between;
+  ASSERT_LT(between, h.clusters.size());
+  const std::size_t last = h.clusters.size() - 1;
+  ASSERT_GE(h.clusters[last].own_group, 0);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const std::vector<Case> cases = {
+      {"a triangle range past CTRI", "triangles " + std::to_string(h.triangles.size()) + "+1 past the " +
+                                         std::to_string(h.triangles.size()) + " of 'CTRI'",
+       [last](LodModel& l) {
+         Cluster& c = l.clusters->clusters[last];
+         c.first_triangle = std::uint32_t(l.clusters->triangles.size());
+         c.triangle_count = 1;
+       }},
+      {"a triangle range overflowing 32 bits", "past the", [last](LodModel& l) {
+         l.clusters->clusters[last].first_triangle = 0xffffffffu;
+         l.clusters->clusters[last].triangle_count = 2;
+       }},
+      {"an own group out of range", "cluster " + std::to_string(last) + ": group " + std::to_string(groups),
+       [last, groups](LodModel& l) { l.clusters->clusters[last].own_group = std::int32_t(groups); }},
+      {"a parent group out of range", "of " + std::to_string(groups), [groups](LodModel& l) {
+         l.clusters->clusters[0].parent_group = std::int32_t(groups + 7);
+       }},
+      {"a group below -1", "section 'CLUS': cluster 0: group -2", [](LodModel& l) {
+         l.clusters->clusters[0].own_group = -2;
+       }},
+      {"a triangle naming a vertex past the cluster vertices",
+       "section 'CTRI': triangle 5 names vertex " + std::to_string(range) + " outside 0+" + std::to_string(range),
+       [range](LodModel& l) { l.clusters->triangles[5][2] = std::int32_t(range); }},
+      {"a triangle naming a negative vertex", "section 'CTRI': triangle 9 names vertex -1",
+       [](LodModel& l) { l.clusters->triangles[9][0] = -1; }},
+      {"a vertex range past the vertices", "lie outside the " + std::to_string(vertices) + " vertices",
+       [vertices](LodModel& l) { l.cluster_vertex_count = vertices + 1; }},
+      {"a non-finite group error", "section 'CGRP': group 3 needs a finite centre, radius >= 0 and error > 0",
+       [nan](LodModel& l) { l.clusters->groups[3].error = nan; }},
+      {"an infinite group error", "section 'CGRP': group 0 needs a finite", [inf](LodModel& l) {
+         l.clusters->groups[0].error = inf;
+       }},
+      {"a zero group error", "group 1 needs a finite", [](LodModel& l) { l.clusters->groups[1].error = 0; }},
+      {"a non-finite centre", "group 2 needs a finite", [nan](LodModel& l) { l.clusters->groups[2].center[1] = nan; }},
+      {"a negative radius", "group 4 needs a finite", [](LodModel& l) { l.clusters->groups[4].radius = -1; }},
+      {"a parent error below its own", "its parent group's error is below its own", [between](LodModel& l) {
+         ClusterHierarchy& c = *l.clusters;
+         const Cluster& cl = c.clusters[between];
+         c.groups[std::size_t(cl.parent_group)].error = c.groups[std::size_t(cl.own_group)].error * 0.5f;
+       }},
+      {"a group that is its own parent", "its own group is its parent", [between](LodModel& l) {
+         Cluster& cl = l.clusters->clusters[between];
+         cl.parent_group = cl.own_group;
+       }},
+      {"a full-detail cluster above level 0", "level 0 and full detail", [](LodModel& l) {
+         l.clusters->clusters[0].level = 1;
+       }},
+      {"a full-detail count CINF disagrees with", "'CINF' says", [](LodModel& l) { l.clusters->full_triangles += 1; }},
+      {"no clusters", "has no clusters", [](LodModel& l) { l.clusters->clusters.clear(); }},
+  };
+  for (const Case& c : cases) {
+    LodModel crafted = m;
+    c.craft(crafted);
+    const std::vector<std::uint8_t> bytes = encode_model(crafted);
+    const std::string error = error_of(bytes.data(), bytes.size());
+    EXPECT_EQ(error.rfind("m.mco: ", 0), 0u) << c.what << ": " << error;
+    EXPECT_NE(error.find("inconsistent model"), std::string::npos) << c.what << ": " << error;
+    EXPECT_NE(error.find(c.expect), std::string::npos) << c.what << ": " << error;
+  }
+  // A CINF record of another size.
+  std::vector<RawSection> sections = split(bunny64_bytes());
+  RawSection& info = sections[index_of(sections, tag("CINF"))];
+  info.payload.resize(16);
+  info.element_size = 16;
+  const std::vector<std::uint8_t> short_info = join(sections, kModelFormatMajor, kModelFormatMinor);
+  EXPECT_NE(error_of(short_info.data(), short_info.size()).find("section 'CINF' must be one record of 24 bytes"),
+            std::string::npos)
+      << error_of(short_info.data(), short_info.size());
+  // CLUS records of another size.
+  sections = split(bunny64_bytes());
+  RawSection& clus = sections[index_of(sections, tag("CLUS"))];
+  clus.element_size = 8;
+  clus.count *= 2;
+  const std::vector<std::uint8_t> narrow = join(sections, kModelFormatMajor, kModelFormatMinor);
+  EXPECT_NE(error_of(narrow.data(), narrow.size()).find("section 'CLUS' has elements of 8 bytes, expected 16"),
+            std::string::npos)
+      << error_of(narrow.data(), narrow.size());
+}
+
+TEST(ModelFile, Format4IsRefusedAsNewer) {
+  static_assert(kModelFormatMajor == 3, "this reader writes format 3");
+  const std::vector<std::uint8_t> four = with_major(bunny64_bytes(), 4);
+  const std::string error = error_of(four.data(), four.size());
+  EXPECT_NE(error.find("newer"), std::string::npos) << error;
+  EXPECT_NE(error.find("format 4.0"), std::string::npos) << error;
+  EXPECT_NE(error.find("reads up to 3"), std::string::npos) << error;
+  // Before anything past the header is looked at.
+  EXPECT_NE(error_of(four.data(), 40).find("newer"), std::string::npos);
 }

@@ -16,6 +16,7 @@
 #include <vtkNew.h>
 #include <vtkPNGReader.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -37,6 +38,17 @@ using scan2lod::testing::have_display;
 const std::string kScans = scan2lod::testing::bunny_scans();
 
 using scan2lod::testing::bunny_model;
+
+// The bunny with the octree alone (R = 32, quick): what --structure clusters refuses.
+const fs::path& octree_only_model() {
+  static const fs::path path = [] {
+    const fs::path p = scan2lod::testing::scratch_folder("models") / "bunny32_octree.mco";
+    const CliRun r = run_cli("build " + kScans + " -o " + p.string() + " -r 32 --structure octree -q");
+    EXPECT_EQ(r.status, 0) << r.output;
+    return p;
+  }();
+  return path;
+}
 
 // An RGB picture, rows from the top.
 struct Picture {
@@ -108,10 +120,14 @@ TEST(VisualizeLevels, PercentListsAreParsedStrictly) {
 
 TEST(VisualizeLevels, TheCutCoversTheSurfaceOnceAtEveryPriority) {
   // Every leaf lies below exactly one node of the cut, whatever the priority.
+  // (octree_cells reads the octree's arrays, so its test does too.)
   const scan2lod::LodModel model = scan2lod::load_model(bunny_model().string());
-  const scan2lod::McOctree& t = model.tree;
-  for (std::size_t p : {std::size_t(0), std::size_t(1), model.lod.full() / 5, model.lod.full()}) {
-    const std::vector<std::int32_t> cut = scan2lod::lod_cut(t, model.lod, p);
+  ASSERT_TRUE(model.octree);
+  const scan2lod::McOctree& t = model.octree->tree;
+  const scan2lod::LodArray& lod = model.octree->lod;
+  for (std::size_t p : {std::size_t(0), std::size_t(1), lod.full() / 5, lod.full()}) {
+    const std::vector<std::int32_t> cut = scan2lod::lod_cut(model, p);
+    EXPECT_EQ(cut, scan2lod::lod_cut(t, lod, p));
     std::vector<int> covered(t.size(), 0);
     for (std::int32_t n : cut) covered[std::size_t(n)] = 1;
     std::size_t leaves = 0;
@@ -123,8 +139,41 @@ TEST(VisualizeLevels, TheCutCoversTheSurfaceOnceAtEveryPriority) {
       ASSERT_EQ(hits, 1) << "leaf " << n << " at priority " << p;
     }
     if (p == 0) EXPECT_EQ(cut, std::vector<std::int32_t>{0});
-    if (p == model.lod.full()) EXPECT_EQ(cut.size(), leaves);
+    if (p == lod.full()) EXPECT_EQ(cut.size(), leaves);
   }
+}
+
+TEST(VisualizeLevels, LevelSourceGivesTheFacesLevelsOfEitherStructure) {
+  const scan2lod::LodModel model = scan2lod::load_model(bunny_model().string());
+  ASSERT_TRUE(model.octree && model.clusters);
+  for (scan2lod::LodStructure s : {scan2lod::LodStructure::kOctree, scan2lod::LodStructure::kClusters}) {
+    scan2lod::LevelSource source(model, s);
+    scan2lod::LevelExtractor extractor(model, s);
+    EXPECT_EQ(source.structure(), s);
+    for (double percent : {100.0, 50.0, 20.0, 0.0, 37.5, 100.0}) {
+      const scan2lod::LevelCut& want = extractor.extract(scan2lod::LevelRequest::at_percent(percent));
+      const scan2lod::Level level = source.at_percent(percent);
+      EXPECT_EQ(level.mesh.triangles.size(), want.triangles.size()) << scan2lod::structure_name(s) << percent;
+      EXPECT_EQ(level.mesh.positions.size(), scan2lod::compact_level(model, want.triangles).positions.size());
+      EXPECT_EQ(level.priority, want.priority);
+      EXPECT_EQ(level.error, want.error);
+      // The slider's path (for the octree a LodCursor): the same triangles as a multiset.
+      std::vector<scan2lod::Triangle> a = source.cut(scan2lod::LevelRequest::at_percent(percent)).triangles;
+      std::vector<scan2lod::Triangle> b = want.triangles;
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      EXPECT_EQ(a, b) << scan2lod::structure_name(s) << " " << percent;
+      const std::vector<std::uint8_t> levels = source.triangle_levels();
+      ASSERT_EQ(levels.size(), a.size());
+      if (s == scan2lod::LodStructure::kClusters && percent == 100.0)
+        EXPECT_EQ(*std::max_element(levels.begin(), levels.end()), 0);
+      if (s == scan2lod::LodStructure::kClusters && percent == 0.0)
+        EXPECT_GT(*std::max_element(levels.begin(), levels.end()), 0);
+    }
+  }
+  EXPECT_EQ(scan2lod::choose_structure(model, "", "m.mco"), scan2lod::LodStructure::kClusters);
+  EXPECT_EQ(scan2lod::choose_structure(model, "octree", "m.mco"), scan2lod::LodStructure::kOctree);
+  EXPECT_THROW(scan2lod::choose_structure(model, "tree", "m.mco"), std::runtime_error);
 }
 
 TEST(VisualizeRender, MontagePanelsShowTheBunnyAndItsLevels) {
@@ -191,6 +240,28 @@ TEST(VisualizeRender, SingleModePutsLevelsSideBySide) {
   EXPECT_GT(fraction(pic, {0, 0, 150, 127}, dark), fraction(pic, {150, 0, 150, 127}, dark));
 }
 
+TEST(VisualizeRender, EitherStructureRendersAndItsTableSaysWhich) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const scan2lod::LodModel model = scan2lod::load_model(bunny_model().string());
+  for (const char* structure : {"octree", "clusters"}) {
+    const fs::path out = scratch() / (std::string("structure_") + structure + ".png");
+    const CliRun r = run_cli("render " + bunny_model().string() + " --structure " + structure +
+                                 " --percent 100,20 --size 150x150 --mode shaded -o " + out.string(),
+                             false);
+    ASSERT_EQ(r.status, 0) << r.output;
+    const bool octree = std::string(structure) == "octree";
+    EXPECT_NE(r.output.find(octree ? "priority" : "clusters"), std::string::npos) << r.output;
+    scan2lod::LevelSource levels(model, octree ? scan2lod::LodStructure::kOctree : scan2lod::LodStructure::kClusters);
+    EXPECT_NE(r.output.find(" " + std::to_string(levels.at_percent(20).mesh.triangles.size()) + " "),
+              std::string::npos)
+        << r.output;
+    const Picture pic = read_png(out);
+    ASSERT_EQ(pic.width, 300);
+    EXPECT_GT(fraction(pic, {0, 0, 150, 127}, not_background), 0.1) << structure;
+    EXPECT_GT(fraction(pic, {150, 0, 150, 127}, not_background), 0.1) << structure;
+  }
+}
+
 TEST(VisualizeRender, BadInputEndsInAClearErrorAndNoFile) {
   const fs::path out = scratch() / "bad.png";
   struct Case {
@@ -205,6 +276,9 @@ TEST(VisualizeRender, BadInputEndsInAClearErrorAndNoFile) {
       {"render " + model + " --percent 120 -o " + out.string(), "between 0 and 100"},
       {"render " + model + " --size 0x100 -o " + out.string(), "WIDTHxHEIGHT"},
       {"render " + model + " --mode flat -o " + out.string(), "shaded, wireframe or both"},
+      {"render " + (scratch() / "missing.mco").string() + " --structure octree -o " + out.string(), "missing.mco"},
+      {"render " + octree_only_model().string() + " --structure clusters -o " + out.string(),
+       "has no clusters structure"},
   };
   for (const Case& c : cases) {
     const CliRun r = run_cli(c.args);
@@ -243,9 +317,9 @@ Curve curve_in(const Picture& pic, const Region& r, const std::uint8_t* colour) 
 TEST(VisualizePlot, TheThreeLodGraphsHoldCurves) {
   if (!have_display()) GTEST_SKIP() << "no X display";
   const fs::path out = scratch() / "plots.png";
-  const CliRun r = run_cli("plot " + bunny_model().string() + " --size 400x300 -o " + out.string());
+  const CliRun r = run_cli("plot " + bunny_model().string() + " --structure octree --size 400x300 -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_NE(r.output.find("3 charts"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("3 charts (octree"), std::string::npos) << r.output;
   const Picture pic = read_png(out);
   ASSERT_EQ(pic.width, 1200);
   ASSERT_EQ(pic.height, 300);
@@ -270,6 +344,34 @@ TEST(VisualizePlot, TheThreeLodGraphsHoldCurves) {
   ASSERT_GE(left_y, 0);
   ASSERT_GE(right_y, 0);
   EXPECT_GT(left_y - right_y, 100);
+}
+
+TEST(VisualizePlot, TheClusterGraphsHoldCurves) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const fs::path out = scratch() / "plots_clusters.png";
+  const CliRun r = run_cli("plot " + bunny_model().string() + " --size 400x300 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("3 charts (clusters"), std::string::npos) << r.output;  // the default structure
+  const Picture pic = read_png(out);
+  ASSERT_EQ(pic.width, 1200);
+  ASSERT_EQ(pic.height, 300);
+  for (int chart = 0; chart < 3; ++chart) {
+    const Curve c = curve_in(pic, {chart * 400, 0, 400, 300}, scan2lod::kPlotBlue);
+    EXPECT_GT(c.columns, 150u) << "chart " << chart;
+    EXPECT_GT(c.rows, 25u) << "chart " << chart;
+  }
+  // Clusters and vertices rise with the triangles: their curves climb left to right.
+  for (int chart = 1; chart < 3; ++chart) {
+    const Region g{chart * 400, 0, 400, 300};
+    int left_y = -1, right_y = -1;
+    for (int x = 0; x < g.width && left_y < 0; ++x)
+      for (int y = g.height - 1; y >= 0; --y)
+        if (near(pic.at(g.x + x, y), scan2lod::kPlotBlue)) { left_y = y; break; }
+    for (int x = g.width - 1; x >= 0 && right_y < 0; --x)
+      for (int y = 0; y < g.height; ++y)
+        if (near(pic.at(g.x + x, y), scan2lod::kPlotBlue)) { right_y = y; break; }
+    EXPECT_GT(left_y - right_y, 100) << "chart " << chart;
+  }
 }
 
 TEST(VisualizePlot, ErrorAgainstTrianglesFallsToZeroAtFullDetail) {
@@ -318,6 +420,8 @@ TEST(VisualizePlot, BadInputEndsInAClearErrorAndNoFile) {
       {"plot " + model + " -o " + (scratch() / "plot.svg").string(), ".png"},
       {"plot " + model + " --reference " + (scratch() / "nope.ply").string() + " -o " + out.string(), "nope.ply"},
       {"plot " + model + " --size 10 -o " + out.string(), "WIDTHxHEIGHT"},
+      {"plot " + octree_only_model().string() + " --structure clusters -o " + out.string(),
+       "has no clusters structure"},
   };
   for (const Case& c : cases) {
     const CliRun r = run_cli(c.args);

@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include <vtkCamera.h>
 #include <vtkCommand.h>
 #include <vtkImageData.h>
 #include <vtkNew.h>
@@ -82,13 +83,15 @@ double covered_fraction(const fs::path& png) {
 TEST(VisualizeViewer, SliderMovesShowTheLevelTheExtractionApiGives) {
   if (!have_display()) GTEST_SKIP() << "no X display; scripts/build.sh test runs the tests under xvfb-run";
   const scan2lod::LodModel model = scan2lod::load_model(bunny_model().string());
-  scan2lod::LevelSource levels(model);
+  ASSERT_TRUE(model.octree);
+  scan2lod::LevelSource levels(model, scan2lod::LodStructure::kOctree);
 
   scan2lod::ViewerOptions options;
   options.width = 640;
   options.height = 480;
   options.offscreen = true;
   options.screenshot = (scratch() / "shot.png").string();
+  options.structure = scan2lod::LodStructure::kOctree;
   scan2lod::Viewer viewer(scan2lod::load_viewer_input({bunny_model().string()}), options);
   ASSERT_NE(viewer.slider(), nullptr);
   EXPECT_EQ(viewer.state().triangles, levels.at_percent(100).mesh.triangles.size());
@@ -122,8 +125,7 @@ TEST(VisualizeViewer, SliderMovesShowTheLevelTheExtractionApiGives) {
   EXPECT_EQ(viewer.state().mode, scan2lod::DrawMode::shaded);
   type_key(viewer, 'o');
   ASSERT_TRUE(viewer.state().cells);
-  EXPECT_EQ(viewer.state().cell_count,
-            scan2lod::lod_cut(model.tree, model.lod, viewer.state().priority).size());
+  EXPECT_EQ(viewer.state().cell_count, scan2lod::lod_cut(model, viewer.state().priority).size());
   drag_slider(viewer, 0);
   EXPECT_EQ(viewer.state().cell_count, 1u);  // the root alone
   drag_slider(viewer, 100);
@@ -138,7 +140,8 @@ TEST(VisualizeViewer, SliderMovesShowTheLevelTheExtractionApiGives) {
   ASSERT_TRUE(viewer.state().slider_by_triangles);
   const std::int64_t budget = std::int64_t(levels.at_percent(50).mesh.triangles.size());
   drag_slider(viewer, double(budget));
-  EXPECT_EQ(viewer.state().priority, scan2lod::priority_for_triangles(model.lod, budget));
+  scan2lod::LevelExtractor octree(model, scan2lod::LodStructure::kOctree);
+  EXPECT_EQ(viewer.state().priority, octree.extract(scan2lod::LevelRequest::at_triangles(budget)).priority);
   EXPECT_LE(std::int64_t(viewer.state().triangles), budget);
   EXPECT_GT(std::int64_t(viewer.state().triangles), budget * 9 / 10);
 
@@ -160,14 +163,14 @@ TEST(VisualizeViewer, ScriptDrivesTheCommandAndReportsEachStep) {
   std::ofstream(script) << "# a user's session\npercent 20\nkey o\nkey Right\npercent 100\nkey 2\nscreenshot "
                         << shot.string() << "\n";
   const CliRun r = scan2lod::testing::run_cli(
-      "view " + bunny_model().string() + " --size 500x400 --script " + script.string(), false);
+      "view " + bunny_model().string() + " --structure octree --size 500x400 --script " + script.string(), false);
   ASSERT_EQ(r.status, 0) << r.output;
   std::vector<std::string> lines;
   std::istringstream in(r.output);
   for (std::string line; std::getline(in, line);) lines.push_back(line);
   ASSERT_EQ(lines.size(), 7u) << r.output;  // the start, then one per command
   const scan2lod::LodModel model = scan2lod::load_model(bunny_model().string());
-  scan2lod::LevelSource levels(model);
+  scan2lod::LevelSource levels(model, scan2lod::LodStructure::kOctree);
   auto shows = [&](const std::string& line, double percent) {
     return line.find("triangles " + std::to_string(levels.at_percent(percent).mesh.triangles.size()) + " ") !=
            std::string::npos;
@@ -180,6 +183,143 @@ TEST(VisualizeViewer, ScriptDrivesTheCommandAndReportsEachStep) {
   EXPECT_TRUE(shows(lines[4], 100)) << lines[4];
   EXPECT_NE(lines[5].find("mode wireframe"), std::string::npos) << lines[5];
   EXPECT_NE(lines[6].find("-> " + shot.string()), std::string::npos) << lines[6];
+  EXPECT_GT(covered_fraction(shot), 0.05);
+}
+
+namespace {
+
+// The CameraView the viewer derives from its camera after `r`: the framing on
+// the model's box (scene.h) in a window of width x height.
+scan2lod::CameraView framed_view(const scan2lod::LodModel& model, int width, int height) {
+  vtkNew<vtkCamera> camera;
+  scan2lod::frame_camera(camera, scan2lod::model_bounds(model), 0, 0, double(width) / height);
+  double p[3], f[3], u[3];
+  camera->GetPosition(p);
+  camera->GetFocalPoint(f);
+  camera->GetViewUp(u);
+  scan2lod::CameraView v;
+  v.eye = scan2lod::Vec3f(float(p[0]), float(p[1]), float(p[2]));
+  v.target = scan2lod::Vec3f(float(f[0]), float(f[1]), float(f[2]));
+  v.up = scan2lod::Vec3f(float(u[0]), float(u[1]), float(u[2]));
+  v.fov_degrees = float(camera->GetViewAngle());
+  v.height = height;
+  return v;
+}
+
+}  // namespace
+
+TEST(VisualizeViewer, ClusterSliderAndCameraCutShowTheFacesLevels) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const scan2lod::LodModel model = scan2lod::load_model(bunny_model().string());
+  ASSERT_TRUE(model.clusters);
+  scan2lod::LevelSource levels(model, scan2lod::LodStructure::kClusters);
+  scan2lod::LevelExtractor extractor(model, scan2lod::LodStructure::kClusters);
+
+  scan2lod::ViewerOptions options;
+  options.width = 640;
+  options.height = 480;
+  options.offscreen = true;
+  options.screenshot = (scratch() / "clusters.png").string();
+  scan2lod::Viewer viewer(scan2lod::load_viewer_input({bunny_model().string()}), options);  // default: clusters
+  ASSERT_EQ(viewer.state().structure, scan2lod::LodStructure::kClusters);
+  for (double percent : {20.0, 60.0, 5.0, 100.0, 37.5}) {
+    drag_slider(viewer, percent);
+    const scan2lod::Level expected = levels.at_percent(percent);
+    const scan2lod::ViewerState s = viewer.state();
+    EXPECT_EQ(s.triangles, expected.mesh.triangles.size()) << percent << " %";
+    EXPECT_EQ(s.vertices, expected.mesh.positions.size()) << percent << " %";
+    EXPECT_EQ(s.clusters, expected.clusters) << percent << " %";
+    EXPECT_EQ(s.error, expected.error) << percent << " %";
+    EXPECT_NE(s.overlay.find(scan2lod::thousands(s.triangles) + " triangles"), std::string::npos) << s.overlay;
+  }
+  type_key(viewer, 'o');  // octree cells: not on the cluster hierarchy
+  EXPECT_FALSE(viewer.state().cells);
+
+  // c: the cut for the framed camera, as the face chooses it at 1 pixel.
+  type_key(viewer, 'r');
+  type_key(viewer, 'c');
+  ASSERT_TRUE(viewer.state().camera_cut);
+  EXPECT_FALSE(viewer.state().frozen);
+  EXPECT_EQ(viewer.state().pixel_error, 1.0);
+  const scan2lod::CameraView view = framed_view(model, options.width, options.height);
+  EXPECT_EQ(viewer.state().triangles,
+            extractor.extract(scan2lod::LevelRequest::for_camera(view, 1)).triangles.size());
+  EXPECT_NE(viewer.state().overlay.find("camera cut"), std::string::npos) << viewer.state().overlay;
+  // ]: double the pixel error, a coarser cut; [ twice: half the first.
+  const std::size_t at1 = viewer.state().triangles;
+  viewer.press_key("bracketright");
+  EXPECT_EQ(viewer.state().pixel_error, 2.0);
+  EXPECT_EQ(viewer.state().triangles, extractor.extract(scan2lod::LevelRequest::for_camera(view, 2)).triangles.size());
+  EXPECT_LE(viewer.state().triangles, at1);
+  viewer.press_key("bracketleft");
+  viewer.press_key("bracketleft");
+  EXPECT_EQ(viewer.state().pixel_error, 0.5);
+  EXPECT_GE(viewer.state().triangles, at1);
+  viewer.press_key("bracketright");
+  // Every camera change selects again: farther away, fewer triangles.
+  const std::size_t selections = viewer.state().camera_selections;
+  viewer.move_camera(0, 0.25);
+  EXPECT_GT(viewer.state().camera_selections, selections);
+  const std::size_t far = viewer.state().triangles;
+  EXPECT_LT(far, at1);
+  viewer.move_camera(30, 1);  // an orbit alone re-selects too
+  EXPECT_EQ(viewer.state().camera_selections, selections + 2);
+  // f: frozen, the camera moves and the cut stays.
+  type_key(viewer, 'f');
+  ASSERT_TRUE(viewer.state().frozen);
+  const std::size_t frozen = viewer.state().triangles;
+  viewer.move_camera(60, 8);
+  EXPECT_EQ(viewer.state().triangles, frozen);
+  EXPECT_EQ(viewer.state().camera_selections, selections + 2);
+  EXPECT_NE(viewer.state().overlay.find("frozen"), std::string::npos);
+  type_key(viewer, 'f');  // following again: close up, more detail
+  EXPECT_FALSE(viewer.state().frozen);
+  EXPECT_GT(viewer.state().triangles, frozen);
+
+  // l: triangles coloured by DAG level; a coarse uniform cut shows the upper levels.
+  type_key(viewer, 'l');
+  EXPECT_TRUE(viewer.state().dag_colors);
+  EXPECT_NE(viewer.state().overlay.find("DAG level"), std::string::npos) << viewer.state().overlay;
+  type_key(viewer, 'r');
+  drag_slider(viewer, 5);  // the slider ends the camera cut
+  EXPECT_FALSE(viewer.state().camera_cut);
+  EXPECT_EQ(viewer.state().triangles, levels.at_percent(5).mesh.triangles.size());
+  type_key(viewer, 's');
+  ASSERT_TRUE(fs::exists(options.screenshot));
+  EXPECT_GT(covered_fraction(options.screenshot), 0.1);
+  type_key(viewer, 'l');
+  EXPECT_FALSE(viewer.state().dag_colors);
+}
+
+TEST(VisualizeViewer, ScriptDrivesTheCameraCut) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const fs::path script = scratch() / "camera.txt", shot = scratch() / "camera.png";
+  std::ofstream(script) << "percent 20\nkey c\nzoom 0.3\nkey f\nzoom 4\norbit 45\nkey f\nkey bracketright\nkey l\n"
+                           "screenshot " << shot.string() << "\nkey c\n";
+  const CliRun r = scan2lod::testing::run_cli(
+      "view " + bunny_model().string() + " --structure clusters --size 500x400 --script " + script.string(), false);
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::vector<std::string> lines;
+  std::istringstream in(r.output);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 12u) << r.output;
+  auto triangles = [](const std::string& line) {
+    const std::size_t at = line.find("triangles ");
+    return at == std::string::npos ? -1L : std::stol(line.substr(at + 10));
+  };
+  EXPECT_NE(lines[0].find("structure clusters camera off"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[2].find("camera live pixel-error 1.00"), std::string::npos) << lines[2];
+  EXPECT_LT(triangles(lines[3]), triangles(lines[2]));  // farther: coarser
+  EXPECT_NE(lines[4].find("camera frozen"), std::string::npos) << lines[4];
+  EXPECT_EQ(triangles(lines[5]), triangles(lines[4]));  // frozen: the camera moves, the cut stays
+  EXPECT_EQ(triangles(lines[6]), triangles(lines[4]));
+  EXPECT_NE(lines[7].find("camera live"), std::string::npos) << lines[7];
+  EXPECT_GT(triangles(lines[7]), triangles(lines[4]));  // following again, close up
+  EXPECT_NE(lines[8].find("pixel-error 2.00"), std::string::npos) << lines[8];
+  EXPECT_NE(lines[9].find("dag-colours on"), std::string::npos) << lines[9];
+  EXPECT_NE(lines[10].find("-> " + shot.string()), std::string::npos) << lines[10];
+  EXPECT_NE(lines[11].find("camera off"), std::string::npos) << lines[11];
+  EXPECT_EQ(triangles(lines[11]), triangles(lines[1]));  // back to the slider's 20 %
   EXPECT_GT(covered_fraction(shot), 0.05);
 }
 
@@ -206,6 +346,8 @@ TEST(VisualizeViewer, BadInputEndsInAClearError) {
       {"view " + bunny_model().string() + " --percent 150", "between 0 and 100"},
       {"view " + bunny_model().string() + " --script " + (scratch() / "none.txt").string(), "none.txt"},
       {"view " + bunny_model().string() + " --screenshot shot.jpg", ".png"},
+      {"view " + bunny_model().string() + " --structure tree", "--structure"},
+      {"view " + kScans + " --structure octree", "--structure applies to a .mco model"},
   };
   for (const Case& c : cases) {
     const CliRun r = scan2lod::testing::run_cli(c.args);

@@ -1,11 +1,9 @@
 #include "visualize/levels.h"
 
 #include "core/error.h"
-#include "lod/extract.h"
 #include "lod/lod_array.h"
 
 #include <algorithm>
-#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -13,43 +11,64 @@
 
 namespace scan2lod {
 
-Level LevelSource::at_priority(std::size_t priority) {
-  const LodModel& m = *model_;
-  assert(priority <= m.lod.full());
-  Level level;
-  level.priority = priority;
-  level.percent = m.lod.full() ? 100.0 * double(priority) / double(m.lod.full()) : 100.0;
+LevelSource::LevelSource(const LodModel& model, LodStructure structure)
+    : model_(&model), extractor_(model, structure) {}
+
+Level LevelSource::at(const LevelRequest& request) {
   const auto start = std::chrono::steady_clock::now();
-  extract_lod(m.tree, m.lod, priority, &scratch_, &triangles_);
-  level.mesh = compact_lod(m.tree, triangles_);
+  last_from_cursor_ = false;
+  const LevelCut& cut = extractor_.extract(request);
+  Level level;
+  level.structure = cut.structure;
+  level.priority = cut.priority;
+  level.error = cut.error;
+  level.clusters = cut.clusters;
+  level.percent = cut.percent;
+  level.mesh = compact_level(*model_, cut.triangles);
   level.extract_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return level;
 }
 
-const std::vector<Triangle>& LevelSource::triangles_at(std::size_t priority, double* seconds) {
-  assert(priority <= model_->lod.full());
-  const auto start = std::chrono::steady_clock::now();
-  if (!cursor_) cursor_.emplace(model_->tree, model_->lod);
-  cursor_->move_to(priority);
-  cursor_->live_triangles(&triangles_);  // without the holes, which the counts shown would include
-  if (seconds) *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return triangles_;
-}
-
 Level LevelSource::at_percent(double percent) {
-  return at_priority(priority_for_percent(model_->lod, std::clamp(percent, 0.0, 100.0)));
+  return at(LevelRequest::at_percent(std::clamp(percent, 0.0, 100.0)));
 }
 
-Level LevelSource::at_triangles(std::int64_t triangles) {
-  return at_priority(priority_for_triangles(model_->lod, triangles));
+Level LevelSource::at_triangles(std::int64_t triangles) { return at(LevelRequest::at_triangles(triangles)); }
+
+const LevelCut& LevelSource::cut(const LevelRequest& request) {
+  using Kind = LevelRequest::Kind;
+  const bool slider = request.kind == Kind::kPercent || request.kind == Kind::kTriangles ||
+                      request.kind == Kind::kPriority;
+  if (structure() != LodStructure::kOctree || !slider) {
+    last_from_cursor_ = false;
+    return extractor_.extract(request);
+  }
+  // The octree's slider: the same priority the extractor would choose, reached
+  // by the cursor's incremental moves.
+  const auto start = std::chrono::steady_clock::now();
+  const OctreeLod& o = *model_->octree;
+  std::size_t p = 0;
+  if (request.kind == Kind::kPercent) p = priority_for_percent(o.lod, std::clamp(request.percent, 0.0, 100.0));
+  else if (request.kind == Kind::kTriangles) p = priority_for_triangles(o.lod, request.triangles);
+  else if (request.priority <= o.lod.full()) p = request.priority;
+  else return extractor_.extract(request);  // its error message
+  const auto selected = std::chrono::steady_clock::now();
+  if (!cursor_) cursor_.emplace(o.tree, o.lod);
+  cursor_->move_to(p);
+  cursor_->live_triangles(&cursor_cut_.triangles);  // without the holes, which the counts shown would include
+  cursor_cut_.structure = LodStructure::kOctree;
+  cursor_cut_.priority = p;
+  cursor_cut_.percent = o.lod.full() ? 100.0 * double(p) / double(o.lod.full()) : 100.0;
+  cursor_cut_.select_seconds = std::chrono::duration<double>(selected - start).count();
+  cursor_cut_.extract_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  last_from_cursor_ = true;
+  return cursor_cut_;
 }
 
-std::int64_t LevelSource::max_triangles() const {
-  const auto& a = model_->lod.accumulated;
-  return a.empty() ? 0 : *std::max_element(a.begin(), a.end());
+std::vector<std::uint8_t> LevelSource::triangle_levels() const {
+  if (last_from_cursor_) return std::vector<std::uint8_t>(cursor_cut_.triangles.size(), 0);
+  return extractor_.triangle_levels();
 }
-
-Aabb model_bounds(const LodModel& model) { return bounds(model.tree.positions); }
 
 std::vector<double> parse_percent_list(const std::string& text, const std::string& flag) {
   std::vector<double> out;
@@ -68,6 +87,15 @@ std::vector<double> parse_percent_list(const std::string& text, const std::strin
   }
   if (out.empty()) throw InputError("", flag + " needs at least one percentage, got '" + text + "'");
   return out;
+}
+
+LodStructure choose_structure(const LodModel& model, const std::string& text, const std::string& source) {
+  LodStructure s = default_structure(model);
+  if (text == "clusters") s = LodStructure::kClusters;
+  else if (text == "octree") s = LodStructure::kOctree;
+  else if (!text.empty()) throw InputError("", "--structure must be clusters or octree, got '" + text + "'");
+  require_structure(model, s, source);
+  return s;
 }
 
 }  // namespace scan2lod

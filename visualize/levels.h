@@ -1,62 +1,82 @@
-// One level of detail of a loaded model, taken the way `scan2lod extract` takes
-// it (extract_lod + compact_lod, seed 003 §6.1-6.2), with the numbers every
-// view shows beside it. The viewer, the montage and the plots share this, so
-// they show exactly what the command line writes.
+// One level of detail of a loaded model, taken through the LOD face
+// (lod/lod_model.h: LevelExtractor + compact_level, what `scan2lod extract`
+// writes), with the numbers every view shows beside it. The viewer, the montage
+// and the plots share this, so they show exactly what the command line writes,
+// for either structure of the model (the octree or the cluster hierarchy).
 #pragma once
 
 #include "core/types.h"
 #include "lod/lod_cursor.h"
-#include "lod/model_file.h"
+#include "lod/lod_model.h"
 
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace scan2lod {
 
 struct Level {
-  std::size_t priority = 0;   // expansions applied
-  double percent = 100;       // priority as a share of the LOD array
+  LodStructure structure = LodStructure::kOctree;
+  std::size_t priority = 0;   // octree: expansions applied
+  double error = 0;           // clusters: the uniform error threshold
+  std::size_t clusters = 0;   // clusters: drawn
+  double percent = 100;       // octree: of the LOD array; clusters: of the full-detail triangles
   TriangleMesh mesh;          // compact: only the vertices its triangles use
-  double extract_seconds = 0; // extract_lod + compact_lod
+  double extract_seconds = 0; // extraction + compact_level
 };
 
-// Takes levels out of one model, keeping the scratch space between calls (the
-// slider re-extracts on every move).
+// Takes levels out of one structure of one model, keeping the extractor's
+// scratch space and tables between calls (the slider and a moving camera
+// re-extract on every change).
 class LevelSource {
  public:
-  explicit LevelSource(const LodModel& model) : model_(&model) {}
-  // The level after `priority` expansions; priority must be <= lod.full().
-  Level at_priority(std::size_t priority);
-  // Only the triangles of that level, extract_lod's in another order: indices
-  // into the model's tree.positions (valid until the next call). They come
-  // from a LodCursor moved from the last call's level, so a slider move costs
-  // in proportion to the expansions it crosses; `seconds` gets that move and
-  // the copy of its live triangles. The viewer draws these against the model's
-  // whole vertex array, uploaded once, so a slider move sends only indices.
-  const std::vector<Triangle>& triangles_at(std::size_t priority, double* seconds);
-  // priority_for_percent (percent clamped to [0, 100]), then at_priority.
-  Level at_percent(double percent);
-  // priority_for_triangles, then at_priority.
+  // Throws InputError if the model lacks `structure`.
+  LevelSource(const LodModel& model, LodStructure structure);
+  // The model's default structure (default_structure).
+  explicit LevelSource(const LodModel& model) : LevelSource(model, default_structure(model)) {}
+
+  // A compact level (LevelExtractor::extract, then compact_level).
+  Level at(const LevelRequest& request);
+  Level at_percent(double percent);  // percent clamped to [0, 100]
   Level at_triangles(std::int64_t triangles);
+
+  // Only the level's triangles: indices into the model's shared vertices
+  // (valid until the next call). The viewer draws them against the whole
+  // vertex array, uploaded once, so a change sends only indices. For the
+  // octree, percent, triangle and priority requests move a LodCursor from the
+  // last call's level (a slider move costs in proportion to the expansions it
+  // crosses; the triangles are extract_lod's in another order, without holes);
+  // everything else goes through the LevelExtractor.
+  const LevelCut& cut(const LevelRequest& request);
+  // Per triangle of the last cut(), its cluster's DAG level (clusters; 0 =
+  // full detail), or zeros for the octree.
+  std::vector<std::uint8_t> triangle_levels() const;
+  // Levels a view may colour: the octree's depth + 1 or the DAG's rounds.
+  int levels() const { return extractor_.levels(); }
+
   const LodModel& model() const { return *model_; }
-  // Triangles at full detail: the largest count the slider can ask for.
-  std::int64_t max_triangles() const;
+  LodStructure structure() const { return extractor_.structure(); }
+  // Triangles at full detail and at the coarsest level: the slider's range.
+  std::int64_t max_triangles() const { return extractor_.full_triangles(); }
+  std::int64_t min_triangles() const { return extractor_.coarsest_triangles(); }
 
  private:
   const LodModel* model_;
-  std::vector<std::uint8_t> scratch_;
-  std::vector<Triangle> triangles_;
-  std::optional<LodCursor> cursor_;  // triangles_at's level, made on first use
+  LevelExtractor extractor_;
+  std::optional<LodCursor> cursor_;  // octree: cut()'s level, made on first use
+  LevelCut cursor_cut_;
+  bool last_from_cursor_ = false;
 };
-
-// The box around every vertex any level can use (all of tree.positions): a
-// camera framed on it keeps every level in view.
-Aabb model_bounds(const LodModel& model);
 
 // Parses "100,80,60" into percentages. Throws InputError (naming `flag`) for
 // an empty list, a non-number, or a value outside [0, 100].
 std::vector<double> parse_percent_list(const std::string& text, const std::string& flag);
+
+// Parses --structure's value ("clusters" or "octree"); empty: the model's
+// default. Throws InputError for another word, or require_structure's
+// message (naming `source`) when the model lacks the structure.
+LodStructure choose_structure(const LodModel& model, const std::string& text, const std::string& source);
 
 }  // namespace scan2lod

@@ -40,11 +40,12 @@ void parse_size(const std::string& text, const std::string& flag, int* width, in
   *height = h;
 }
 
-Montage render_montage(const LodModel& model, const std::vector<double>& percents, const MontageOptions& options,
-                       const std::string& path) {
+Montage render_montage(const LodModel& model, LodStructure structure, const std::vector<double>& percents,
+                       const MontageOptions& options, const std::string& path) {
   if (percents.empty()) throw InputError("", "render needs at least one level");
   if (options.panel_width < 16 || options.panel_height < 16)
     throw InputError("", "panels must be at least 16x16 pixels");
+  require_structure(model, structure, "");
   require_display("render");
 
   const bool both = options.mode == RenderMode::both;
@@ -63,7 +64,7 @@ Montage render_montage(const LodModel& model, const std::vector<double>& percent
   frame_camera(camera, model_bounds(model), options.azimuth, options.elevation,
                double(options.panel_width) / double(options.panel_height));
 
-  LevelSource source(model);
+  LevelSource source(model, structure);
   Progress progress("render", percents.size());
   for (std::size_t i = 0; i < percents.size(); ++i) {
     const Level level = source.at_percent(percents[i]);
@@ -81,6 +82,8 @@ Montage render_montage(const LodModel& model, const std::vector<double>& percent
       panel.height = options.panel_height;
       panel.percent = percents[i];
       panel.priority = level.priority;
+      panel.error = level.error;
+      panel.clusters = level.clusters;
       panel.triangles = level.mesh.triangles.size();
       panel.vertices = level.mesh.positions.size();
       montage.panels.push_back(panel);

@@ -4,7 +4,7 @@
 // triangles and vertices.
 #pragma once
 
-#include "lod/model_file.h"
+#include "lod/lod_model.h"
 
 #include <cstddef>
 #include <string>
@@ -32,7 +32,10 @@ struct MontagePanel {
   int x = 0, y = 0, width = 0, height = 0;
   RenderMode mode = RenderMode::shaded;  // shaded or wireframe
   double percent = 0;                    // as asked
-  std::size_t priority = 0, triangles = 0, vertices = 0;
+  std::size_t priority = 0;              // octree: expansions
+  double error = 0;                      // clusters: the uniform error threshold
+  std::size_t clusters = 0;              // clusters: drawn
+  std::size_t triangles = 0, vertices = 0;
 };
 
 struct Montage {
@@ -40,11 +43,12 @@ struct Montage {
   std::vector<MontagePanel> panels;  // level by level; wireframe first in a row
 };
 
-// Renders the levels at `percents` off-screen into one PNG at `path` (written
+// Renders the levels of `structure` at `percents` off-screen into one PNG at `path` (written
 // atomically). Throws InputError for a bad size, an empty list, no X display
-// (see require_display), or a failed write. Progress on a terminal.
-Montage render_montage(const LodModel& model, const std::vector<double>& percents, const MontageOptions& options,
-                       const std::string& path);
+// (see require_display), a structure the model lacks, or a failed write.
+// Progress on a terminal.
+Montage render_montage(const LodModel& model, LodStructure structure, const std::vector<double>& percents,
+                       const MontageOptions& options, const std::string& path);
 
 // Parses "WxH" (e.g. 400x300) into positive pixel counts up to 8192.
 // Throws InputError naming `flag` otherwise.

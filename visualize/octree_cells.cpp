@@ -10,6 +10,7 @@
 #include <vtkPolyData.h>
 #include <vtkTypeInt32Array.h>
 
+#include <algorithm>
 #include <cassert>
 
 namespace scan2lod {
@@ -72,6 +73,27 @@ vtkSmartPointer<vtkPolyData> cell_outlines(const McOctree& tree, const std::vect
   poly->SetLines(lines);
   poly->GetCellData()->SetScalars(levels);
   return poly;
+}
+
+std::vector<std::int32_t> lod_cut(const LodModel& model, std::size_t priority) {
+  if (!model.octree) return {};
+  return lod_cut(model.octree->tree, model.octree->lod, std::min(priority, model.octree->lod.full()));
+}
+
+vtkSmartPointer<vtkPolyData> cell_outlines(const LodModel& model, const std::vector<std::int32_t>& nodes) {
+  if (!model.octree) return cell_outlines(McOctree{}, {});
+  return cell_outlines(model.octree->tree, nodes);
+}
+
+OctreeSeries octree_series(const LodModel& model) {
+  OctreeSeries s;
+  if (!model.octree) return s;
+  const McOctree& tree = model.octree->tree;
+  const LodArray& lod = model.octree->lod;
+  s.metric.reserve(lod.full());
+  for (std::size_t i = 0; i < lod.full(); ++i) s.metric.push_back(double(tree.metrics[std::size_t(lod.order[i])]));
+  s.triangles.assign(lod.accumulated.begin(), lod.accumulated.end());
+  return s;
 }
 
 }  // namespace scan2lod

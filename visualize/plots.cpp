@@ -4,6 +4,7 @@
 #include "core/progress.h"
 #include "measure/surface_distance.h"
 #include "visualize/levels.h"
+#include "visualize/octree_cells.h"
 #include "visualize/png_output.h"
 
 #include <vtkAxis.h>
@@ -67,10 +68,10 @@ void pad_left_axis(vtkChartXY* chart, const std::vector<double>& values) {
 
 }  // namespace
 
-std::vector<LevelError> level_errors(const LodModel& model, const TriangleMesh& reference,
+std::vector<LevelError> level_errors(const LodModel& model, LodStructure structure, const TriangleMesh& reference,
                                      const std::vector<double>& percents, std::size_t samples) {
   std::vector<LevelError> out;
-  LevelSource source(model);
+  LevelSource source(model, structure);
   Progress progress("error", percents.size());
   CompareOptions compare;
   compare.samples = samples;
@@ -80,6 +81,7 @@ std::vector<LevelError> level_errors(const LodModel& model, const TriangleMesh& 
     LevelError e;
     e.percent = percent;
     e.priority = level.priority;
+    e.error = level.error;
     e.triangles = level.mesh.triangles.size();
     const double unit = c.diagonal > 0 ? 100.0 / c.diagonal : 0.0;
     e.mean_to_reference = c.a_to_b.mean * unit;
@@ -91,14 +93,15 @@ std::vector<LevelError> level_errors(const LodModel& model, const TriangleMesh& 
   return out;
 }
 
-PlotPicture write_lod_plots(const LodModel& model, const std::vector<LevelError>& errors, const PlotOptions& options,
-                            const std::string& path) {
+PlotPicture write_lod_plots(const LodModel& model, LodStructure structure, const std::vector<LevelError>& errors,
+                            const PlotOptions& options, const std::string& path) {
+  require_structure(model, structure, "");
   require_display("plot");
-  const LodArray& lod = model.lod;
   const int columns = errors.empty() ? 3 : 2, rows = errors.empty() ? 1 : 2;
   PlotPicture picture;
   picture.width = columns * options.chart_width;
   picture.height = rows * options.chart_height;
+  picture.full_triangles = LevelExtractor(model, structure).full_triangles();
 
   vtkNew<vtkContextView> view;
   view->GetRenderWindow()->SetOffScreenRendering(1);
@@ -119,58 +122,104 @@ PlotPicture write_lod_plots(const LodModel& model, const std::vector<LevelError>
     return chart;
   };
 
-  // Fig. 6.6: the metric of the node each priority number expands.
-  std::vector<double> priority, metric;
-  for (std::size_t i = 0; i < lod.full(); ++i) {
-    priority.push_back(double(i));
-    metric.push_back(double(model.tree.metrics[std::size_t(lod.order[i])]));
-  }
-  // The metric spans orders of magnitude (a few coarse nodes carry most of
-  // the area), so it goes on a log axis when enough of it is positive; values
-  // under 1e-8 of the largest (0, negative, float rounding) are drawn on
-  // that floor.
-  double largest = 0;
-  std::size_t positive = 0;
-  for (double m : metric) largest = std::max(largest, m), positive += m > 0;
-  const double floor = 1e-8 * largest;
-  const bool log_metric = options.log_metric && positive > metric.size() / 2;
-  std::vector<double> shown = metric;
-  if (log_metric)
-    for (double& m : shown) m = std::max(m, floor);
-  const char* metric_title = log_metric ? "LOD metric (log)" : "LOD metric";
-  vtkNew<vtkTable> metrics;
-  metrics->AddColumn(column("priority", priority));
-  metrics->AddColumn(column("LOD metric", shown));
-  vtkChartXY* a = chart_at(0, "LOD metric (Fig. 6.6)");
-  label(a, "LOD metric (Fig. 6.6)", "priority number", metric_title);
-  add_line(a, metrics, 1, kPlotBlue, 1.f);
-  if (log_metric) a->GetAxis(vtkAxis::LEFT)->SetLogScale(true);
-  else pad_left_axis(a, metric);
+  // The tables stay alive until the picture is written.
+  vtkNew<vtkTable> metrics, head, accumulation, cut_table;
+  if (structure == LodStructure::kOctree) {
+    const OctreeSeries series = octree_series(model);
+    const std::vector<double>& metric = series.metric;
+    picture.priorities = metric.size();
+    std::vector<double> priority;
+    for (std::size_t i = 0; i < metric.size(); ++i) priority.push_back(double(i));
+    // Fig. 6.6: the metric of the node each priority number expands. The
+    // metric spans orders of magnitude (a few coarse nodes carry most of the
+    // area), so it goes on a log axis when enough of it is positive; values
+    // under 1e-8 of the largest (0, negative, float rounding) are drawn on
+    // that floor.
+    double largest = 0;
+    std::size_t positive = 0;
+    for (double m : metric) largest = std::max(largest, m), positive += m > 0;
+    const double floor = 1e-8 * largest;
+    const bool log_metric = options.log_metric && positive > metric.size() / 2;
+    std::vector<double> shown = metric;
+    if (log_metric)
+      for (double& m : shown) m = std::max(m, floor);
+    const char* metric_title = log_metric ? "LOD metric (log)" : "LOD metric";
+    metrics->AddColumn(column("priority", priority));
+    metrics->AddColumn(column("LOD metric", shown));
+    vtkChartXY* a = chart_at(0, "LOD metric (Fig. 6.6)");
+    label(a, "LOD metric (Fig. 6.6)", "priority number", metric_title);
+    add_line(a, metrics, 1, kPlotBlue, 1.f);
+    if (log_metric) a->GetAxis(vtkAxis::LEFT)->SetLogScale(true);
+    else pad_left_axis(a, metric);
 
-  // Fig. 6.7: its first priorities, where the order matters most.
-  const std::size_t part = std::min(options.part, lod.full());
-  vtkNew<vtkTable> head;
-  head->AddColumn(column("priority", std::vector<double>(priority.begin(), priority.begin() + long(part))));
-  head->AddColumn(column("LOD metric", std::vector<double>(metric.begin(), metric.begin() + long(part))));
-  const std::string part_title = "LOD metric, first " + std::to_string(part) + " (Fig. 6.7)";
-  vtkChartXY* b = chart_at(1, part_title);
-  label(b, part_title, "priority number", "LOD metric");
-  add_line(b, head, 1, kPlotBlue, 1.5f);
-  pad_left_axis(b, std::vector<double>(metric.begin(), metric.begin() + long(part)));
+    // Fig. 6.7: its first priorities, where the order matters most.
+    const std::size_t part = std::min(options.part, metric.size());
+    head->AddColumn(column("priority", std::vector<double>(priority.begin(), priority.begin() + long(part))));
+    head->AddColumn(column("LOD metric", std::vector<double>(metric.begin(), metric.begin() + long(part))));
+    const std::string part_title = "LOD metric, first " + std::to_string(part) + " (Fig. 6.7)";
+    vtkChartXY* b = chart_at(1, part_title);
+    label(b, part_title, "priority number", "LOD metric");
+    add_line(b, head, 1, kPlotBlue, 1.5f);
+    pad_left_axis(b, std::vector<double>(metric.begin(), metric.begin() + long(part)));
 
-  // Fig. 6.8: triangles after each number of expansions.
-  std::vector<double> steps, triangles;
-  for (std::size_t i = 0; i < lod.accumulated.size(); ++i) {
-    steps.push_back(double(i));
-    triangles.push_back(double(lod.accumulated[i]));
+    // Fig. 6.8: triangles after each number of expansions.
+    std::vector<double> steps;
+    for (std::size_t i = 0; i < series.triangles.size(); ++i) steps.push_back(double(i));
+    accumulation->AddColumn(column("priority", steps));
+    accumulation->AddColumn(column("triangles", series.triangles));
+    vtkChartXY* c = chart_at(2, "Accumulated triangles (Fig. 6.8)");
+    label(c, "Accumulated triangles (Fig. 6.8)", "priority number", "triangles");
+    add_line(c, accumulation, 1, kPlotBlue, 2.f);
+    pad_left_axis(c, series.triangles);
+  } else {
+    // The uniform cut at 201 shares of the full triangle count, coarsest first.
+    std::vector<double> percents;
+    for (int i = 0; i <= 200; ++i) percents.push_back(0.5 * i);
+    std::vector<double> tris, error, clusters, vertices;
+    for (const LevelSummary& l : summarize_levels(model, structure, percents)) {
+      if (!tris.empty() && double(l.triangles) == tris.back()) continue;  // the same cut again
+      tris.push_back(double(l.triangles));
+      error.push_back(l.error);
+      clusters.push_back(double(l.clusters));
+      vertices.push_back(double(l.vertices));
+    }
+    std::size_t positive = 0;
+    double smallest = 0, largest = 0;
+    for (double e : error) {
+      positive += e > 0;
+      if (e > 0 && (smallest == 0 || e < smallest)) smallest = e;
+      largest = std::max(largest, e);
+    }
+    const bool log_error = options.log_metric && positive > error.size() / 2;
+    // The full-detail cut's 0 has no place on a log axis: it is drawn on a
+    // floor below the smallest positive threshold.
+    std::vector<double> shown = error;
+    if (log_error)
+      for (double& e : shown) e = std::max(e, 0.5 * smallest);
+    cut_table->AddColumn(column("triangles", tris));
+    cut_table->AddColumn(column("error", shown));
+    cut_table->AddColumn(column("clusters", clusters));
+    cut_table->AddColumn(column("vertices", vertices));
+    const char* error_title = log_error ? "object-space error (log)" : "object-space error";
+    vtkChartXY* a = chart_at(0, "Error threshold against triangles");
+    label(a, "Error threshold against triangles", "triangles", error_title);
+    add_line(a, cut_table, 1, kPlotBlue, 2.f);
+    if (log_error) {
+      a->GetAxis(vtkAxis::LEFT)->SetLogScale(true);
+      a->GetAxis(vtkAxis::LEFT)->SetBehavior(vtkAxis::FIXED);
+      a->GetAxis(vtkAxis::LEFT)->SetRange(0.4 * smallest, 1.25 * largest);
+    } else {
+      pad_left_axis(a, error);
+    }
+    vtkChartXY* b = chart_at(1, "Clusters drawn against triangles");
+    label(b, "Clusters drawn against triangles", "triangles", "clusters");
+    add_line(b, cut_table, 2, kPlotBlue, 2.f);
+    pad_left_axis(b, clusters);
+    vtkChartXY* c = chart_at(2, "Vertices used against triangles");
+    label(c, "Vertices used against triangles", "triangles", "vertices");
+    add_line(c, cut_table, 3, kPlotBlue, 2.f);
+    pad_left_axis(c, vertices);
   }
-  vtkNew<vtkTable> accumulation;
-  accumulation->AddColumn(column("priority", steps));
-  accumulation->AddColumn(column("triangles", triangles));
-  vtkChartXY* c = chart_at(2, "Accumulated triangles (Fig. 6.8)");
-  label(c, "Accumulated triangles (Fig. 6.8)", "priority number", "triangles");
-  add_line(c, accumulation, 1, kPlotBlue, 2.f);
-  pad_left_axis(c, triangles);
 
   vtkNew<vtkTable> error_table;
   if (!errors.empty()) {

@@ -4,6 +4,7 @@
 #include "acquisition/scan_set.h"
 #include "core/error.h"
 #include "io/mesh_file.h"
+#include "lod/model_file.h"
 #include "visualize/levels.h"
 #include "visualize/octree_cells.h"
 #include "visualize/png_output.h"
@@ -13,6 +14,7 @@
 #include <vtkActor.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCamera.h>
+#include <vtkCellData.h>
 #include <vtkCommand.h>
 #include <vtkCoordinate.h>
 #include <vtkInteractorStyleTrackballCamera.h>
@@ -31,6 +33,7 @@
 #include <vtkSliderWidget.h>
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
 
 #include <algorithm>
 #include <cctype>
@@ -42,6 +45,7 @@
 #include <istream>
 #include <ostream>
 #include <sstream>
+#include <cstring>
 
 namespace scan2lod {
 namespace {
@@ -122,7 +126,17 @@ std::string describe(const ViewerState& s) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
   out.precision(2);
-  if (s.has_levels) out << "percent " << s.percent << " priority " << s.priority << ' ';
+  const bool clusters = s.has_levels && s.structure == LodStructure::kClusters;
+  if (s.has_levels) {
+    out << "percent " << s.percent << ' ';
+    if (clusters) {
+      char e[40];
+      std::snprintf(e, sizeof e, "%.4g", s.error);
+      out << "error " << e << " clusters " << s.clusters << ' ';
+    } else {
+      out << "priority " << s.priority << ' ';
+    }
+  }
   if (s.scan_set) {
     out << "points " << s.vertices << " normals " << (s.normals ? "on" : "off");
     return out.str();
@@ -130,7 +144,14 @@ std::string describe(const ViewerState& s) {
   out << "triangles " << s.triangles << " vertices " << s.vertices << " mode " << draw_mode_name(s.mode)
       << " cells " << (s.cells ? std::to_string(s.cell_count) : std::string("off")) << " split "
       << (s.split ? std::to_string(s.compare_triangles) : std::string("off"));
-  if (s.has_levels) out << " slider " << (s.slider_by_triangles ? "triangles " : "percent ") << s.slider_value;
+  if (s.has_levels) {
+    out << " slider " << (s.slider_by_triangles ? "triangles " : "percent ") << s.slider_value << " structure "
+        << structure_name(s.structure);
+  }
+  if (clusters) {
+    out << " camera " << (s.camera_cut ? (s.frozen ? "frozen" : "live") : "off") << " pixel-error " << s.pixel_error
+        << " selections " << s.camera_selections << " dag-colours " << (s.dag_colors ? "on" : "off");
+  }
   return out.str();
 }
 
@@ -148,7 +169,8 @@ vtkStandardNewMacro(ViewerStyle);
 struct Viewer::Impl {
   ViewerInput input;
   ViewerOptions options;
-  std::optional<LevelSource> source;
+  std::optional<LevelSource> source;          // the main view's levels
+  std::optional<LevelSource> compare_source;  // the split view's (so the main cut's DAG levels stay)
   ViewerState state;
   Aabb box;
 
@@ -164,7 +186,8 @@ struct Viewer::Impl {
   vtkNew<vtkActor> compare_actor;
   vtkNew<vtkPolyDataMapper> cells_mapper;
   vtkNew<vtkActor> cells_actor;
-  vtkNew<vtkLookupTable> level_colors;
+  vtkNew<vtkLookupTable> level_colors;  // octree cells by level: coarse blue to fine red
+  vtkNew<vtkLookupTable> dag_colors;    // triangles by DAG level: coarse (high) blue to fine (0) red
   vtkNew<vtkScalarBarActor> level_legend;
   vtkNew<vtkTextActor> overlay;
   vtkNew<vtkTextActor> compare_overlay;
@@ -176,12 +199,22 @@ struct Viewer::Impl {
   vtkSmartPointer<vtkPolyData> level_poly;  // a model: all vertices, the level's triangles
   std::vector<std::uint8_t> vertex_used;
   std::size_t level_vertices = 0;
+  bool shown_uniform = false;  // the level shown is a slider's (not a camera's) cut
+  vtkNew<vtkCallbackCommand> main_render_started;
+  CameraView last_view;        // the camera the camera cut was last chosen for
+  bool have_view = false;
   Clock::time_point render_start;
 
   Impl(ViewerInput in, const ViewerOptions& o) : input(std::move(in)), options(o) {}
 
   void build();
-  void show_level(std::size_t priority);
+  void show_level(const LevelRequest& request);
+  void show_cut(const LevelCut& cut);
+  LevelRequest slider_request(double value) const;
+  CameraView camera_view() const;
+  void select_for_camera(const CameraView& view);
+  void on_main_render();
+  void set_camera_cut(bool on);
   void show_compare();
   void apply_mode();
   void update_cells();
@@ -325,32 +358,49 @@ void Viewer::Impl::build() {
       mesh_mapper->SetInputData(mesh_to_poly_data(input.mesh));
       help->SetInput("1 shaded  2 wireframe  3 edges  4 points  5 colours\nr reset   s screenshot   q quit");
     } else {
-      source.emplace(*input.model);
+      const LodModel& model = *input.model;
+      const LodStructure structure = options.structure.value_or(default_structure(model));
+      require_structure(model, structure, input.source);
+      source.emplace(model, structure);
+      compare_source.emplace(model, structure);
       state.has_levels = true;
+      state.structure = structure;
+      state.levels = source->levels();
       // Every level's vertices, once: points, normals and colours for VTK.
       TriangleMesh vertices;
-      vertices.positions = input.model->tree.positions;
-      vertices.normals = input.model->tree.normals;
-      vertices.colors = input.model->tree.colors;
+      vertices.positions = model.vertices.positions;
+      vertices.normals = model.vertices.normals;
+      vertices.colors = model.vertices.colors;
       level_poly = mesh_to_poly_data(vertices);
       vertex_used.assign(vertices.positions.size(), 0);
       mesh_mapper->SetInputData(level_poly);
-      box = model_bounds(*input.model);
-      const int depth = input.model->tree.depth;
-      level_colors->SetNumberOfTableValues(depth + 1);
-      level_colors->SetHueRange(0.66, 0.0);  // coarse blue to fine red
-      level_colors->SetTableRange(0, depth);
+      box = model_bounds(model);
+      const int top = std::max(state.levels - 1, 1);
+      level_colors->SetNumberOfTableValues(top + 1);
+      level_colors->SetHueRange(0.66, 0.0);  // coarse blue (root, level 0) to fine red
+      level_colors->SetTableRange(0, top);
       level_colors->Build();
+      dag_colors->SetNumberOfTableValues(top + 1);
+      dag_colors->SetHueRange(0.0, 0.66);  // fine red (DAG level 0) to coarse blue (the top)
+      dag_colors->SetTableRange(0, top);
+      dag_colors->Build();
       cells_mapper->SetLookupTable(level_colors);
       cells_mapper->SetScalarModeToUseCellData();
-      cells_mapper->SetScalarRange(0, depth);
+      cells_mapper->SetScalarRange(0, top);
       cells_actor->SetMapper(cells_mapper);
       cells_actor->GetProperty()->LightingOff();
       cells_actor->GetProperty()->SetOpacity(0.6);
       cells_actor->VisibilityOff();
       main->AddActor(cells_actor);
-      level_legend->SetLookupTable(level_colors);
-      level_legend->SetTitle("level");
+      main_render_started->SetClientData(this);
+      main_render_started->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
+        static_cast<Viewer::Impl*>(self)->on_main_render();
+      });
+      main->AddObserver(vtkCommand::StartEvent, main_render_started);
+      const int depth = top;
+      const bool octree = structure == LodStructure::kOctree;
+      level_legend->SetLookupTable(octree ? level_colors.Get() : dag_colors.Get());
+      level_legend->SetTitle(octree ? "level" : "DAG level");
       level_legend->SetNumberOfLabels(std::min(depth + 1, 10));
       level_legend->SetLabelFormat("%.0f");
       level_legend->SetMaximumWidthInPixels(90);
@@ -368,11 +418,15 @@ void Viewer::Impl::build() {
       level_legend->SetHeight(0.5);
       level_legend->VisibilityOff();
       main->AddViewProp(level_legend);
-      help->SetInput(
-          "slider / Left Right (1 %) / Up Down (10 %): level   t slider by % or triangles\n"
-          "1 shaded  2 wireframe  3 edges  4 points  5 colours\n"
-          "o octree cells   v split view   [ ] its level\n"
-          "r reset camera   s screenshot   q quit");
+      help->SetInput(octree ? "slider / Left Right (1 %) / Up Down (10 %): level   t slider by % or triangles\n"
+                              "1 shaded  2 wireframe  3 edges  4 points  5 colours\n"
+                              "o octree cells   v split view   [ ] its level\n"
+                              "r reset camera   s screenshot   q quit"
+                            : "slider / Left Right (1 %) / Up Down (10 %): level   t slider by % or triangles\n"
+                              "1 shaded  2 wireframe  3 edges  4 points  5 colours\n"
+                              "c camera cut   f freeze it   [ ] its pixel error   l colour by DAG level\n"
+                              "v split view   [ ] its level (without camera cut)\n"
+                              "r reset camera   s screenshot   q quit");
 
       vtkNew<vtkSliderRepresentation2D> rep;
       rep->GetPoint1Coordinate()->SetCoordinateSystemToNormalizedDisplay();
@@ -404,7 +458,7 @@ void Viewer::Impl::build() {
       set_slider_unit(false);
       rep->SetValue(std::clamp(options.percent, 0.0, 100.0));
       slider->EnabledOn();
-      show_level(priority_for_percent(input.model->lod, std::clamp(options.percent, 0.0, 100.0)));
+      show_level(LevelRequest::at_percent(std::clamp(options.percent, 0.0, 100.0)));
       state.compare_percent = std::clamp(options.compare_percent, 0.0, 100.0);
     }
   }
@@ -417,7 +471,7 @@ void Viewer::Impl::set_slider_unit(bool by_triangles) {
   auto* rep = static_cast<vtkSliderRepresentation2D*>(slider->GetRepresentation());
   state.slider_by_triangles = by_triangles;
   if (by_triangles) {
-    const std::int64_t lo = input.model->lod.accumulated.empty() ? 0 : input.model->lod.accumulated[0];
+    const std::int64_t lo = source->min_triangles();
     rep->SetMinimumValue(double(lo));
     rep->SetMaximumValue(double(std::max<std::int64_t>(source->max_triangles(), lo + 1)));
     rep->SetValue(double(state.triangles));
@@ -428,30 +482,58 @@ void Viewer::Impl::set_slider_unit(bool by_triangles) {
     rep->SetMaximumValue(100);
     rep->SetValue(state.percent);
     rep->SetLabelFormat("%.1f");
-    rep->SetTitleText("LOD % (share of the LOD array)");
+    rep->SetTitleText(state.structure == LodStructure::kOctree ? "LOD % (share of the LOD array)"
+                                                                : "LOD % (share of the full-detail triangles)");
   }
   state.slider_value = rep->GetValue();
+}
+
+LevelRequest Viewer::Impl::slider_request(double v) const {
+  return state.slider_by_triangles ? LevelRequest::at_triangles(std::int64_t(std::llround(v)))
+                                   : LevelRequest::at_percent(std::clamp(v, 0.0, 100.0));
 }
 
 void Viewer::Impl::on_slider() {
   auto* rep = static_cast<vtkSliderRepresentation2D*>(slider->GetRepresentation());
   const double v = rep->GetValue();
   state.slider_value = v;
-  const LodArray& lod = input.model->lod;
-  const std::size_t p = state.slider_by_triangles ? priority_for_triangles(lod, std::int64_t(std::llround(v)))
-                                                  : priority_for_percent(lod, v);
-  if (p != state.priority || state.triangles == 0) show_level(p);
+  // A slider move takes a uniform level again: the camera cut ends.
+  state.camera_cut = false;
+  state.frozen = false;
+  show_level(slider_request(v));
   update_overlay();
 }
 
-void Viewer::Impl::show_level(std::size_t priority) {
-  // extract_lod alone: the triangles index the model's vertex array, which
-  // went to VTK (and the GPU) once, so only the indices change.
-  double seconds = 0;
-  const std::vector<Triangle>& triangles = source->triangles_at(priority, &seconds);
+void Viewer::Impl::show_level(const LevelRequest& request) {
+  const bool uniform = request.kind != LevelRequest::Kind::kCamera;
+  const LevelCut& cut = source->cut(request);
+  // The same level again (a slider move inside one step): nothing to send.
+  const bool same = uniform && shown_uniform && state.triangles == cut.triangles.size() && state.triangles != 0 &&
+                    (state.structure == LodStructure::kOctree
+                         ? cut.priority == state.priority
+                         : cut.error == state.error && cut.clusters == state.clusters);
+  shown_uniform = uniform;
+  if (same) return;
+  show_cut(cut);
+}
+
+void Viewer::Impl::show_cut(const LevelCut& cut) {
+  // Only the triangles change: they index the model's vertex array, which
+  // went to VTK (and the GPU) once.
+  const std::vector<Triangle>& triangles = cut.triangles;
   const auto start = Clock::now();
   set_triangles(level_poly, triangles);
-  // Vertices the level uses, as compact_lod would keep them.
+  if (state.structure == LodStructure::kClusters) {
+    // Each triangle's DAG level as cell data, always in step with the cells.
+    std::vector<std::uint8_t> levels = source->triangle_levels();
+    levels.resize(triangles.size(), 0);
+    auto array = vtkSmartPointer<vtkUnsignedCharArray>::New();
+    array->SetName("DagLevel");
+    array->SetNumberOfTuples(vtkIdType(levels.size()));
+    if (!levels.empty()) std::memcpy(array->GetPointer(0), levels.data(), levels.size());
+    level_poly->GetCellData()->AddArray(array);
+  }
+  // Vertices the level uses, as compact_level would keep them.
   std::size_t used = 0;
   for (const Triangle& t : triangles)
     for (std::int32_t v : t)
@@ -460,28 +542,78 @@ void Viewer::Impl::show_level(std::size_t priority) {
     for (std::int32_t v : t) vertex_used[std::size_t(v)] = 0;
   level_vertices = used;
   state.convert_ms = ms_since(start);
-  state.extract_ms = seconds * 1e3;
-  state.priority = priority;
-  const std::size_t full = input.model->lod.full();
-  state.percent = full ? 100.0 * double(priority) / double(full) : 100.0;
+  state.extract_ms = cut.extract_seconds * 1e3;
+  state.priority = cut.priority;
+  state.percent = cut.percent;
+  state.error = cut.error;
+  state.clusters = cut.clusters;
+  state.triangles = triangles.size();
   rendering_after_change = true;
   if (state.cells) update_cells();
 }
 
+CameraView Viewer::Impl::camera_view() const {
+  double p[3], f[3], u[3];
+  camera->GetPosition(p);
+  camera->GetFocalPoint(f);
+  camera->GetViewUp(u);
+  CameraView v;
+  v.eye = Vec3f(float(p[0]), float(p[1]), float(p[2]));
+  v.target = Vec3f(float(f[0]), float(f[1]), float(f[2]));
+  v.up = Vec3f(float(u[0]), float(u[1]), float(u[2]));
+  v.fov_degrees = float(camera->GetViewAngle());
+  const int* size = window->GetSize();
+  v.height = size && size[1] > 0 ? size[1] : options.height;
+  return v;
+}
+
+void Viewer::Impl::select_for_camera(const CameraView& view) {
+  last_view = view;
+  have_view = true;
+  show_level(LevelRequest::for_camera(view, state.pixel_error));
+  ++state.camera_selections;
+  update_overlay();
+}
+
+// The main renderer starts drawing: a live camera cut follows a camera that
+// moved since its last selection (any change of eye, target, up, angle or
+// window height; the clipping range the renderer resets does not count).
+void Viewer::Impl::on_main_render() {
+  if (!state.camera_cut || state.frozen) return;
+  const CameraView v = camera_view();
+  if (have_view && v.eye == last_view.eye && v.target == last_view.target && v.up == last_view.up &&
+      v.fov_degrees == last_view.fov_degrees && v.height == last_view.height)
+    return;
+  select_for_camera(v);
+  render_start = Clock::now();  // the window's StartEvent came before the change
+}
+
+void Viewer::Impl::set_camera_cut(bool on) {
+  state.camera_cut = on;
+  state.frozen = false;
+  if (on) select_for_camera(camera_view());
+  else show_level(slider_request(state.slider_value));
+}
+
 void Viewer::Impl::show_compare() {
-  const Level level = source->at_percent(state.compare_percent);
+  const Level level = compare_source->at_percent(state.compare_percent);
   compare_mapper->SetInputData(mesh_to_poly_data(level.mesh));
   state.compare_triangles = level.mesh.triangles.size();
   char text[200];
-  std::snprintf(text, sizeof text, "LOD %.1f %% (priority %zu)\n%s triangles\n%s vertices", level.percent,
-                level.priority, thousands(level.mesh.triangles.size()).c_str(),
-                thousands(level.mesh.positions.size()).c_str());
+  if (level.structure == LodStructure::kOctree)
+    std::snprintf(text, sizeof text, "LOD %.1f %% (priority %zu)\n%s triangles\n%s vertices", level.percent,
+                  level.priority, thousands(level.mesh.triangles.size()).c_str(),
+                  thousands(level.mesh.positions.size()).c_str());
+  else
+    std::snprintf(text, sizeof text, "LOD %.1f %% (error %.3g, %zu clusters)\n%s triangles\n%s vertices",
+                  level.percent, level.error, level.clusters, thousands(level.mesh.triangles.size()).c_str(),
+                  thousands(level.mesh.positions.size()).c_str());
   compare_overlay->SetInput(text);
 }
 
 void Viewer::Impl::update_cells() {
-  const std::vector<std::int32_t> cut = lod_cut(input.model->tree, input.model->lod, state.priority);
-  cells_mapper->SetInputData(cell_outlines(input.model->tree, cut));
+  const std::vector<std::int32_t> cut = lod_cut(*input.model, state.priority);
+  cells_mapper->SetInputData(cell_outlines(*input.model, cut));
   state.cell_count = cut.size();
 }
 
@@ -506,6 +638,14 @@ void Viewer::Impl::apply_mode() {
       }
       break;
   }
+  if (state.dag_colors) {  // over any mode's colours
+    mesh_mapper->ScalarVisibilityOn();
+    mesh_mapper->SetScalarModeToUseCellFieldData();
+    mesh_mapper->SelectColorArray("DagLevel");
+    mesh_mapper->SetColorModeToMapScalars();
+    mesh_mapper->SetLookupTable(dag_colors);
+    mesh_mapper->UseLookupTableScalarRangeOn();
+  }
 }
 
 void Viewer::Impl::update_overlay() {
@@ -525,12 +665,28 @@ void Viewer::Impl::update_overlay() {
                   thousands(state.triangles).c_str(), thousands(state.vertices).c_str(), draw_mode_name(state.mode));
     text << line;
   } else {
-    std::snprintf(line, sizeof line,
-                  "LOD %.1f %%   priority %zu of %zu\n%s triangles\n%s vertices\nextract %.1f ms (+%.1f ms to VTK)\n%s",
-                  state.percent, state.priority, input.model->lod.full(), thousands(state.triangles).c_str(),
-                  thousands(state.vertices).c_str(), state.extract_ms, state.convert_ms, draw_mode_name(state.mode));
+    if (state.structure == LodStructure::kOctree)
+      std::snprintf(line, sizeof line, "octree: LOD %.1f %%   priority %zu", state.percent, state.priority);
+    else if (state.camera_cut)
+      std::snprintf(line, sizeof line, "clusters: LOD %.1f %%   camera cut at %g px%s   %s clusters", state.percent,
+                    state.pixel_error, state.frozen ? " (frozen)" : "", thousands(state.clusters).c_str());
+    else
+      std::snprintf(line, sizeof line, "clusters: LOD %.1f %%   error %.3g   %s clusters", state.percent, state.error,
+                    thousands(state.clusters).c_str());
+    text << line;
+    std::snprintf(line, sizeof line, "\n%s triangles\n%s vertices\nextract %.1f ms (+%.1f ms to VTK)\n%s",
+                  thousands(state.triangles).c_str(), thousands(state.vertices).c_str(), state.extract_ms,
+                  state.convert_ms, draw_mode_name(state.mode));
     text << line;
     if (state.cells) text << "\noctree cells: " << thousands(state.cell_count) << " nodes of the cut";
+    if (state.structure == LodStructure::kClusters) {
+      if (state.camera_cut)
+        text << "\ncamera cut " << (state.frozen ? "frozen (f follows the camera again)" : "live (f freezes it)")
+             << ", [ ] pixel error, c off";
+      else
+        text << "\nuniform cut (c: camera cut)";
+      if (state.dag_colors) text << "\ncolour: DAG level (" << state.levels << " levels, red finest, blue coarsest)";
+    }
   }
   state.overlay = text.str();
   overlay->SetInput(state.overlay.c_str());
@@ -566,6 +722,7 @@ void Viewer::Impl::set_split(bool on) {
 
 bool Viewer::Impl::key(const std::string& k) {
   const bool mesh = input.kind != ViewerInput::Kind::scans;
+  const bool clusters = state.has_levels && state.structure == LodStructure::kClusters;
   auto mode = [&](DrawMode m) {
     if (!mesh) return;
     state.mode = m;
@@ -581,7 +738,21 @@ bool Viewer::Impl::key(const std::string& k) {
   else if (k == "n" && !mesh) {
     state.normals = !state.normals;
     for (auto& a : normal_actors) a->SetVisibility(state.normals);
-  } else if (k == "o" && state.has_levels) {
+  } else if (k == "c" && clusters) {
+    set_camera_cut(!state.camera_cut);
+  } else if (k == "f" && clusters && state.camera_cut) {
+    state.frozen = !state.frozen;
+    if (!state.frozen) select_for_camera(camera_view());  // catch up with the camera
+  } else if ((k == "bracketleft" || k == "[" || k == "bracketright" || k == "]") && state.camera_cut) {
+    const bool finer = k == "bracketleft" || k == "[";
+    state.pixel_error = std::clamp(state.pixel_error * (finer ? 0.5 : 2.0), 1.0 / 64, 1024.0);
+    // A frozen cut is chosen again for the camera it was frozen at.
+    select_for_camera(state.frozen ? last_view : camera_view());
+  } else if (k == "l" && clusters) {
+    state.dag_colors = !state.dag_colors;
+    apply_mode();
+    level_legend->SetVisibility(state.dag_colors);
+  } else if (k == "o" && state.has_levels && state.structure == LodStructure::kOctree) {
     state.cells = !state.cells;
     if (state.cells) update_cells();
     cells_actor->SetVisibility(state.cells);
@@ -697,14 +868,30 @@ void Viewer::run_script(std::istream& in, const std::string& source, std::ostrea
     } else if (command == "key") {
       if (arg.empty()) throw InputError(source, where + "'key' needs a key name (o, s, Right, ...)");
       press_key(arg);
+    } else if (command == "orbit" || command == "zoom") {
+      const double v = number_arg();
+      if (command == "zoom" && !(v > 0))
+        throw InputError(source, where + "'zoom' needs a factor above 0 (2 goes twice as close), got '" + arg + "'");
+      if (command == "orbit") move_camera(v, 1);
+      else move_camera(0, v);
     } else if (command == "screenshot") {
       screenshot(arg);
     } else if (command != "print") {
       throw InputError(source, where + "unknown command '" + command +
-                                   "', expected percent, triangles, slider, key, screenshot or print");
+                                   "', expected percent, triangles, slider, key, orbit, zoom, screenshot or print");
     }
     log << describe(state()) << (command == "screenshot" ? " -> " + impl_->state.last_screenshot : "") << '\n';
   }
+}
+
+void Viewer::move_camera(double azimuth, double dolly) {
+  vtkCamera* c = impl_->camera;
+  if (azimuth != 0) c->Azimuth(azimuth);
+  if (dolly != 1) c->Dolly(dolly);
+  c->OrthogonalizeViewUp();
+  impl_->main->ResetCameraClippingRange();
+  if (impl_->state.split) impl_->compare->ResetCameraClippingRange();
+  impl_->render();
 }
 
 void Viewer::start() {

@@ -1,12 +1,15 @@
 // The interactive viewer (`scan2lod view`): one VTK window on a LOD model, a
-// mesh or a scan set. On a model a slider (vtkSliderWidget) picks the level by
-// percentage of the LOD array or by triangle budget, and every move takes it
-// by reference, the triangles `scan2lod extract` gives, through a LodCursor
-// that applies only the expansions in between (LevelSource): nothing is
+// mesh or a scan set. On a model a slider (vtkSliderWidget) picks the level of
+// one LOD structure (the octree or the cluster hierarchy) by percentage or by
+// triangle budget, and every move takes it by reference through the LOD face,
+// the triangles `scan2lod extract` gives (LevelSource; for the octree a
+// LodCursor that applies only the expansions in between): nothing is
 // simplified again. Keys switch the drawing (shaded, wireframe,
 // shaded with edges, points, vertex colour), show the octree cells of the
 // current cut coloured by level, and split the window into two levels under
-// one camera. A scan set shows each range image's oriented points in its own
+// one camera. On the cluster hierarchy, `c` lets the cut follow the camera
+// (re-selected at a pixel error, `[` `]`, on every camera change), `f` freezes
+// it to inspect it from outside, and `l` colours triangles by DAG level. A scan set shows each range image's oriented points in its own
 // colour with its normals as short lines, to check alignment and normals
 // before a build.
 //
@@ -16,7 +19,7 @@
 #pragma once
 
 #include "core/types.h"
-#include "lod/model_file.h"
+#include "lod/lod_model.h"
 
 #include <iosfwd>
 #include <memory>
@@ -51,6 +54,8 @@ struct ViewerOptions {
   // Where `s` saves: this path, or when it exists, NAME_2.png, NAME_3.png, ...
   std::string screenshot = "scan2lod_view.png";
   bool offscreen = false;          // render without showing a window (scripts, tests)
+  // A model's levels come from this structure; unset: default_structure.
+  std::optional<LodStructure> structure;
 };
 
 enum class DrawMode { shaded, wireframe, shaded_edges, points, vertex_colors };
@@ -61,11 +66,14 @@ struct ViewerState {
   bool has_levels = false;           // a model: the slider is there
   bool slider_by_triangles = false;  // the slider's unit
   double slider_value = 0;
-  double percent = 100;              // of the LOD array, of the level shown
-  std::size_t priority = 0;
+  LodStructure structure = LodStructure::kOctree;  // where a model's levels come from
+  double percent = 100;              // of the level shown: of the LOD array (octree), of the full triangles (clusters)
+  std::size_t priority = 0;          // octree: expansions
+  double error = 0;                  // clusters: the uniform cut's error threshold (0 for a camera cut)
+  std::size_t clusters = 0;          // clusters: drawn
   std::size_t triangles = 0;  // polygons in the displayed poly data
   std::size_t vertices = 0;   // points in the displayed poly data
-  double extract_ms = 0;      // taking the last level change's triangles (LevelSource::triangles_at)
+  double extract_ms = 0;      // taking the last level change's triangles (LevelSource::cut)
   double convert_ms = 0;      // plain mesh -> vtkPolyData
   double render_ms = 0;       // the first render after the change: upload and draw
   DrawMode mode = DrawMode::shaded;
@@ -74,6 +82,14 @@ struct ViewerState {
   bool split = false;
   double compare_percent = 0;
   std::size_t compare_triangles = 0;
+  // Clusters: the view-dependent cut (key c), re-selected for the camera on
+  // every camera change unless frozen (key f), at `pixel_error` pixels ([ ]).
+  bool camera_cut = false;
+  bool frozen = false;
+  double pixel_error = 1;
+  std::size_t camera_selections = 0;  // cuts chosen for a camera so far
+  bool dag_colors = false;      // clusters: triangles coloured by DAG level (key l)
+  int levels = 0;               // octree depth + 1, or the DAG's levels
   bool scan_set = false;        // showing oriented points, not a mesh
   bool normals = false;         // scan sets: normal glyphs shown
   std::string overlay;          // the text in the window's corner
@@ -106,10 +122,15 @@ class Viewer {
   // Empty `path`: the next free name after options.screenshot.
   std::string screenshot(const std::string& path = "");
   // Runs commands, one per line, printing the state after each to `log`:
-  //   percent P | triangles T | slider V | key KEYSYM | screenshot PATH | print
+  //   percent P | triangles T | slider V | key KEYSYM | orbit DEGREES |
+  //   zoom FACTOR | screenshot PATH | print
+  // (orbit turns the camera about the focal point's up axis, zoom dollies it
+  // towards the focal point by FACTOR > 0, as a user's drag would).
   // Blank lines and lines starting with # are skipped. Throws InputError
   // naming `source` and the line for anything else.
   void run_script(std::istream& in, const std::string& source, std::ostream& log);
+  // Turns the camera (azimuth, degrees) and dollies it (factor), then renders.
+  void move_camera(double azimuth, double dolly);
   // Shows the window and runs the event loop until it is closed (or `q`).
   void start();
 

@@ -32,6 +32,7 @@
 #include "lod/extract.h"
 #include "lod/lod_array.h"
 #include "lod/lod_cursor.h"
+#include "lod/lod_model.h"
 #include "lod/model_file.h"
 
 #include <CLI/CLI.hpp>
@@ -90,7 +91,9 @@ void flush_caches() {
   sink = sink + total;
 }
 
-double timed_extract(const LodModel& m, std::size_t priority, int threads, bool cold,
+// The octree alone: the cursor is the octree's, and extract_lod is what it is
+// measured against (lod/lod_model.h's LevelExtractor calls it for the octree).
+double timed_extract(const OctreeLod& m, std::size_t priority, int threads, bool cold,
                      std::vector<std::uint8_t>* scratch, std::vector<Triangle>* triangles) {
   omp_set_num_threads(threads);
   if (cold) flush_caches();
@@ -99,7 +102,7 @@ double timed_extract(const LodModel& m, std::size_t priority, int threads, bool 
   return seconds_since(start);
 }
 
-CaseResult run_case(const LodModel& m, const MoveCase& c, int reps, int all_threads, bool cold) {
+CaseResult run_case(const OctreeLod& m, const MoveCase& c, int reps, int all_threads, bool cold) {
   CaseResult r;
   LodCursor cursor(m.tree, m.lod);
   std::vector<std::uint8_t> scratch;
@@ -162,9 +165,15 @@ int main(int argc, char** argv) {
       return 2;
     }
     std::fprintf(stderr, "building the model of %s at R=%d\n", input.c_str(), resolution);
-    model = build_model_timed(load_oriented_points({input}), resolution).model;
+    model = build_model_timed(load_oriented_points({input}), resolution, /*clusters=*/false).model;
     source = "`" + input + "` built at R = " + std::to_string(resolution) + " (bench/model_build.h)";
   }
+  if (!model.octree) {
+    std::fprintf(stderr, "%s has no octree: build it with scan2lod build --structure octree or both\n",
+                 source.c_str());
+    return 2;
+  }
+  const OctreeLod& octree = *model.octree;
   const int threads = omp_get_max_threads();
 
   std::vector<std::pair<const MoveCase*, CaseResult>> results;
@@ -172,7 +181,7 @@ int main(int argc, char** argv) {
   for (const MoveCase& c : cases) {
     if (c.name.find(only) == std::string::npos) continue;
     std::fprintf(stderr, "%s\n", c.name.c_str());
-    results.push_back({&c, run_case(model, c, reps, threads, !warm)});
+    results.push_back({&c, run_case(octree, c, reps, threads, !warm)});
   }
 
   std::printf("# Incremental extraction: `LodCursor::move_to` against `extract_lod`\n\n");
@@ -182,7 +191,7 @@ int main(int argc, char** argv) {
   const std::string revision = source_revision();
   if (!revision.empty()) std::printf("Source: %s (at run time)  \n", revision.c_str());
   std::printf("Input: %s: %zu nodes, %zu expansions, %lld triangles at full detail\n\n", source.c_str(),
-              model.tree.size(), model.lod.full(), (long long)model.lod.accumulated[model.lod.full()]);
+              octree.tree.size(), octree.lod.full(), (long long)octree.lod.accumulated[octree.lod.full()]);
   std::printf("Times in µs, median (mean) over every timed move of %d runs, %s. Ratio: `extract_lod` over "
               "`move_to`, of the medians and of the totals.\n\n",
               reps, warm ? "caches warm (`--warm`)" : "caches flushed before every timed call");

@@ -12,8 +12,8 @@
 //      (priority_for_percent): extract_lod() alone, repeated at least --reps
 //      times and for at least 0.25 s with the scratch vectors reused, median
 //      and range; output triangles; triangles per second; and extract_lod() +
-//      compact_lod() (a self-contained mesh), median over as many repetitions.
-//   3. Peers, each simplifying the SAME full mesh (compact_lod of the 100 %
+//      compact_level() (a self-contained mesh), median over as many repetitions.
+//   3. Peers, each simplifying the SAME full mesh (compact_level of the 100 %
 //      extraction) to the triangle count of each scan2lod level below 100 %:
 //      meshopt_simplify and meshopt_simplifySloppy (meshoptimizer), OpenMesh
 //      Decimater + ModQuadricT, VTK vtkQuadricDecimation and
@@ -36,6 +36,21 @@
 //      seconds at each level (goal >= 100), scan2lod error / peer error (goal:
 //      below 1 against every vertex-clustering peer, at most 1.5 against every
 //      quadric edge-collapse peer); and the report says which goals are met.
+//   6. The cluster hierarchy (lod/cluster_hierarchy.h), built in the same
+//      model-build children (add_cluster_hierarchy over the reconstruction's
+//      mesh, as `scan2lod build` does) and read through the LOD face only
+//      (lod/lod_model.h: LevelExtractor, compact_level): the uniform cut at
+//      budgets of 1k to 200k triangles (LevelRequest::at_triangles), each
+//      peer run once on the same full mesh at the cut's actual count, and the
+//      octree's finest level with at most as many triangles; the errors as in
+//      4. Also: the hierarchy's build alone on the full mesh (its own child,
+//      --runs times: seconds and peak RSS) against meshopt_simplify of that
+//      mesh to 1 % (same run, same mesh); stored triangles / full; the
+//      coarsest cut; view-dependent selection (LevelRequest::for_camera, 1
+//      pixel, at 48 cameras around the model: LevelCut::select_seconds, per
+//      camera the median of --reps, then the median over the cameras); and
+//      extraction rates (triangles / LevelCut::extract_seconds) at full
+//      detail and at every budget. Goals from issue 12.
 //
 // Children get the work by fork() without exec (bench/bench_support.h), so the parent never runs
 // OpenMP (reconstruct, load_oriented_points, compare_surfaces) before the last
@@ -55,6 +70,7 @@
 #include "core/types.h"
 #include "lod/extract.h"
 #include "lod/lod_array.h"
+#include "lod/lod_model.h"
 #include "lod/mc_octree.h"
 #include "lod/model_file.h"
 #include "measure/surface_distance.h"
@@ -410,7 +426,7 @@ struct Level {
   std::int64_t accumulated = 0;  // the accumulation table's count at `priority`, which should equal it
   std::size_t vertices = 0;
   Outcome extraction;  // values: see measure_extraction
-  TriangleMesh mesh;   // compact_lod of the level
+  TriangleMesh mesh;   // compact_level of the level
   MeshTopology topology;
   std::optional<SurfaceComparison> fidelity;
   std::string measure_error;
@@ -427,17 +443,20 @@ struct Level {
 // The first cut of the LOD array whose nodes' own triangles (no transitions,
 // so cracks stay open: the seed's mesh before its projection) number at least
 // `target`, with the hole patches extract_lod would show there.
+// An octree diagnostic, so it reads the octree's arrays (model.octree) rather
+// than going through LevelExtractor.
 TriangleMesh open_cut(const LodModel& model, std::int64_t target, std::size_t* priority) {
-  const McOctree& tree = model.tree;
+  const McOctree& tree = model.octree->tree;
+  const LodArray& lod = model.octree->lod;
   std::int64_t count = tree.triangle_counts[0];
   std::size_t p = 0;
-  for (; p < model.lod.full() && count < target; ++p) {
-    const std::int32_t node = model.lod.order[p];
+  for (; p < lod.full() && count < target; ++p) {
+    const std::int32_t node = lod.order[p];
     count -= tree.triangle_counts[node];
     for (int c = 0; c < tree.child_counts[node]; ++c) count += tree.triangle_counts[tree.first_child[node] + c];
   }
   std::vector<std::uint8_t> flags(tree.size(), 0);
-  mark_cut(tree, model.lod, p, flags.data());
+  mark_cut(tree, lod, p, flags.data());
   std::vector<Triangle> triangles;
   for (std::size_t n = 0; n < tree.size(); ++n)
     if (flags[n] == 2) {
@@ -453,34 +472,167 @@ TriangleMesh open_cut(const LodModel& model, std::int64_t target, std::size_t* p
                        tree.patch_triangles.begin() + tree.patch_group_first[g + 1]);
   }
   *priority = p;
-  return compact_lod(tree, triangles);
+  return compact_level(model, triangles);
 }
 
-// extract_lod at `priority`, repeated at least `reps` times and for at least
-// 0.25 s, scratch reused. Values: extract median, min, max; extract +
-// compact_lod median; repetitions; triangles.
+// The octree's level at `priority` (LevelExtractor, LevelRequest::at_priority:
+// extract_lod), repeated at least `reps` times and for at least 0.25 s, the
+// extractor's scratch reused. Values: extract median, min, max; extract +
+// compact_level median; repetitions; triangles.
 Values measure_extraction(const LodModel& model, std::size_t priority, int reps) {
-  std::vector<std::uint8_t> expanded;
-  std::vector<Triangle> triangles;
-  extract_lod(model.tree, model.lod, priority, &expanded, &triangles);  // warm-up: sizes the scratch
+  LevelExtractor extractor(model, LodStructure::kOctree);
+  const LevelRequest request = LevelRequest::at_priority(priority);
+  extractor.extract(request);  // warm-up: sizes the scratch
   std::vector<double> alone, with_compact;
+  std::size_t triangles = 0;
   const auto begin = Clock::now();
   for (int i = 0; i < 100000 && (i < reps || seconds_since(begin) < 0.25); ++i) {
     const auto start = Clock::now();
-    extract_lod(model.tree, model.lod, priority, &expanded, &triangles);
+    triangles = extractor.extract(request).triangles.size();
     alone.push_back(seconds_since(start));
   }
   const auto begin_compact = Clock::now();
   for (std::size_t i = 0; i < alone.size() && (int(i) < reps || seconds_since(begin_compact) < 0.25); ++i) {
     const auto start = Clock::now();
-    extract_lod(model.tree, model.lod, priority, &expanded, &triangles);
-    const TriangleMesh mesh = compact_lod(model.tree, triangles);
+    const LevelCut& cut = extractor.extract(request);
+    const TriangleMesh mesh = compact_level(model, cut.triangles);
     with_compact.push_back(seconds_since(start));
-    if (mesh.triangles.size() != triangles.size()) throw std::runtime_error("compact_lod lost triangles");
+    if (mesh.triangles.size() != cut.triangles.size()) throw std::runtime_error("compact_level lost triangles");
   }
   return {median(alone), *std::min_element(alone.begin(), alone.end()),
           *std::max_element(alone.begin(), alone.end()), median(with_compact), double(alone.size()),
-          double(triangles.size()), 0, 0};
+          double(triangles), 0, 0};
+}
+
+// ---------------------------------------------------------------------------
+// The cluster hierarchy, through the LOD face (lod/lod_model.h) only.
+
+// Budgets of the uniform cuts (LevelRequest::at_triangles).
+const std::vector<std::int64_t> kClusterBudgets = {1000, 2000, 5000, 10000, 20000, 50000, 100000, 200000};
+
+// Goal windows of issue 12: error against meshopt_simplify up to this budget,
+// against the vertex-clustering peers up to that one; extraction rate at full
+// detail and at budgets from this one up.
+constexpr std::int64_t kSimplifyGoalMax = 100000, kClusteringGoalMax = 20000, kRateGoalMin = 50000;
+
+struct ClusterLevel {
+  std::int64_t budget = 0;     // asked for; 0: full detail (LevelRequest::at_percent(100))
+  std::int64_t triangles = 0;  // the cut's
+  std::size_t clusters = 0;
+  double threshold = 0;        // LevelCut::error, the uniform object-space error
+  TriangleMesh mesh;           // compact_level of the cut
+  MeshTopology topology;
+  Outcome extraction;          // values: see measure_cluster_extraction
+  std::optional<SurfaceComparison> fidelity;
+  std::string measure_error;
+  // The octree's finest level with at most as many triangles (its coarsest when none is).
+  std::int64_t octree_triangles = 0;
+  TriangleMesh octree_mesh;
+  std::optional<SurfaceComparison> octree_fidelity;
+  std::vector<PeerCase> peers;  // empty at full detail and for a budget the full mesh is under
+
+  std::string label() const { return budget == 0 ? "100 %" : format("%lldk", (long long)(budget / 1000)); }
+  double extract_seconds() const { return extraction.values[0]; }
+  const PeerCase* peer(const std::string& name) const {
+    for (const PeerCase& c : peers)
+      if (c.peer->name == name) return &c;
+    return nullptr;
+  }
+};
+
+LevelRequest cluster_request(const ClusterLevel& l) {
+  return l.budget == 0 ? LevelRequest::at_percent(100) : LevelRequest::at_triangles(l.budget);
+}
+
+// The cluster cut of `request`, repeated at least `reps` times and for at least
+// 0.25 s, the extractor's tables and scratch reused. Values: extract_seconds
+// median, min, max; select_seconds median; repetitions; triangles; extract +
+// compact_level median.
+Values measure_cluster_extraction(const LodModel& model, const LevelRequest& request, int reps) {
+  LevelExtractor extractor(model, LodStructure::kClusters);
+  extractor.extract(request);  // warm-up: sizes the scratch
+  std::vector<double> extract, select, with_compact;
+  std::size_t triangles = 0;
+  const auto begin = Clock::now();
+  for (int i = 0; i < 100000 && (i < reps || seconds_since(begin) < 0.25); ++i) {
+    const LevelCut& cut = extractor.extract(request);
+    extract.push_back(cut.extract_seconds);
+    select.push_back(cut.select_seconds);
+    triangles = cut.triangles.size();
+  }
+  const auto begin_compact = Clock::now();
+  for (std::size_t i = 0; i < extract.size() && (int(i) < reps || seconds_since(begin_compact) < 0.25); ++i) {
+    const auto start = Clock::now();
+    const LevelCut& cut = extractor.extract(request);
+    const TriangleMesh mesh = compact_level(model, cut.triangles);
+    with_compact.push_back(seconds_since(start));
+    if (mesh.triangles.size() != cut.triangles.size()) throw std::runtime_error("compact_level lost triangles");
+  }
+  return {median(extract), *std::min_element(extract.begin(), extract.end()),
+          *std::max_element(extract.begin(), extract.end()), median(select), double(extract.size()),
+          double(triangles), median(with_compact), 0};
+}
+
+// `n` cameras looking at the model's centre from directions spread evenly over
+// the sphere (a Fibonacci lattice), at 1.5, 3 and 6 times the box's half
+// diagonal in turn: close views keep the near side fine, far ones coarsen all.
+std::vector<CameraView> orbit_cameras(const Aabb& box, int n) {
+  const Vec3f center = 0.5f * (box.min + box.max);
+  const float radius = 0.5f * box.diagonal();
+  const float golden = float(M_PI) * (3.0f - std::sqrt(5.0f));
+  const float distances[3] = {1.5f, 3.0f, 6.0f};
+  std::vector<CameraView> cameras;
+  for (int i = 0; i < n; ++i) {
+    const float y = 1.0f - 2.0f * (float(i) + 0.5f) / float(n), r = std::sqrt(std::max(0.0f, 1.0f - y * y));
+    const Vec3f direction(r * std::cos(golden * float(i)), y, r * std::sin(golden * float(i)));
+    CameraView c;
+    c.eye = center + distances[i % 3] * radius * direction;
+    c.target = center;
+    c.up = std::abs(y) > 0.99f ? Vec3f(1, 0, 0) : Vec3f(0, 1, 0);
+    cameras.push_back(c);
+  }
+  return cameras;
+}
+
+// LevelRequest::for_camera at `pixel_error` from every camera, `reps` times
+// each (after one untimed call). Values: median over the cameras of each
+// camera's median select_seconds; the largest of those; the median of the
+// cameras' median extract_seconds; median, min and max triangles; cameras.
+Values measure_view_selection(const LodModel& model, const std::vector<CameraView>& cameras, double pixel_error,
+                              int reps) {
+  LevelExtractor extractor(model, LodStructure::kClusters);
+  std::vector<double> select, extract, triangles;
+  for (const CameraView& c : cameras) {
+    const LevelRequest request = LevelRequest::for_camera(c, pixel_error);
+    extractor.extract(request);
+    std::vector<double> s, e;
+    for (int i = 0; i < reps; ++i) {
+      const LevelCut& cut = extractor.extract(request);
+      s.push_back(cut.select_seconds);
+      e.push_back(cut.extract_seconds);
+      if (i == 0) triangles.push_back(double(cut.triangles.size()));
+    }
+    select.push_back(median(s));
+    extract.push_back(median(e));
+  }
+  return {median(select), *std::max_element(select.begin(), select.end()), median(extract), median(triangles),
+          *std::min_element(triangles.begin(), triangles.end()), *std::max_element(triangles.begin(), triangles.end()),
+          double(cameras.size()), 0};
+}
+
+// Whether two index buffers hold the same triangles, each up to rotation,
+// in any order.
+bool same_triangles(std::vector<Triangle> a, std::vector<Triangle> b) {
+  if (a.size() != b.size()) return false;
+  const auto canonical = [](std::vector<Triangle>* v) {
+    for (Triangle& t : *v) {
+      while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+    }
+    std::sort(v->begin(), v->end());
+  };
+  canonical(&a);
+  canonical(&b);
+  return a == b;
 }
 
 struct Settings {
@@ -507,6 +659,16 @@ struct RunInfo {
   double diagonal = 0;
   int depth = 0;
   int clustering_cap = 0;  // max_clustering_divisions of the full mesh
+  // The cluster hierarchy.
+  std::size_t clusters = 0, stored_triangles = 0;
+  int cluster_levels = 0;
+  std::int64_t cluster_full = 0, coarsest = 0;
+  bool same_full = false;               // its full detail holds the octree's full-detail triangles
+  std::vector<Outcome> cluster_builds;  // add_cluster_hierarchy alone on the full mesh: seconds, stored, clusters
+  std::vector<Outcome> simplify_1;      // meshopt_simplify of the same mesh to 1 %: seconds, triangles
+  Outcome view;                         // measure_view_selection
+  double pixel_error = 1;
+  int view_reps = 0;
 };
 
 // ---------------------------------------------------------------------------
@@ -570,6 +732,12 @@ void report_build(Report& r, const RunInfo& info) {
   for (Outcome& o : total) o.values[0] += o.values[1] + o.values[2];
   r.add("| **model build** = octree + numbering | **%s** |\n", spread_cell(model, 0, 1, 3).c_str());
   r.add("| points → model (all three) | %s |\n", spread_cell(total, 0, 1, 3).c_str());
+  std::vector<Outcome> with_clusters = info.builds;
+  for (Outcome& o : with_clusters) o.values[0] += o.values[1] + o.values[2] + o.values[4];
+  r.add("| `add_cluster_hierarchy(model, reconstruction mesh)` (the cluster hierarchy, all threads) | %s |\n",
+        spread_cell(info.builds, 4, 1, 3).c_str());
+  r.add("| points → model with both structures (as `scan2lod build`) | %s |\n",
+        spread_cell(with_clusters, 0, 1, 3).c_str());
   double peak = 0;
   for (const Outcome& o : info.builds) peak = std::max(peak, o.peak_mib);
   r.add("\nPeak RSS of a build process: %.0f MiB (an idle child of this benchmark peaks at %.0f MiB: "
@@ -583,7 +751,7 @@ void report_build(Report& r, const RunInfo& info) {
 void report_extraction(Report& r, const std::vector<Level>& levels, std::size_t full_priority) {
   r.add("## Extraction by reference\n\n");
   r.add("| level | priority (%% of the array) | triangles | vertices | `extract_lod` ms (median; min–max; reps) | M triangles/s "
-        "| `extract_lod` + `compact_lod` ms (median) | boundary loops | non-manifold edges | components "
+        "| `extract_lod` + `compact_level` ms (median) | boundary loops | non-manifold edges | components "
         "| error to full (1e-3 diag) | p95 / max (1e-3 diag) |\n");
   r.add("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const Level& l : levels) {
@@ -805,11 +973,11 @@ void report_notes(Report& r, const Settings& s, const RunInfo& info, const std::
         "on (ordered chunks, the same output as one thread). Levels are `priority_for_percent(p)`, "
         "i.e. the largest offered priority (`monotone_priorities`) at or below p %% of the LOD array. "
         "`extract_lod` was timed at least %d times and for at least 0.25 s per level with its scratch vectors "
-        "reused (the first, sizing call untimed); `compact_lod` adds building a self-contained mesh. The peers' "
+        "reused (the first, sizing call untimed); `compact_level` adds building a self-contained mesh. The peers' "
         "times compare with `extract_lod` alone because their outputs, too, are index buffers or meshes the "
         "library already holds.\n",
         s.resolution, sysconf(_SC_NPROCESSORS_ONLN), s.reps);
-  r.add("- Peers simplify the full mesh (the model's 100 %% level, `compact_lod`, %zu triangles) to each "
+  r.add("- Peers simplify the full mesh (the model's 100 %% level, `compact_level`, %zu triangles) to each "
         "level's triangle count. Their times exclude copying the mesh into the library's types and back.\n",
         info.full_triangles);
   for (const Peer& p : peers) r.add("- %s: %s.\n", p.name.c_str(), p.setup.c_str());
@@ -845,10 +1013,166 @@ void report_notes(Report& r, const Settings& s, const RunInfo& info, const std::
   r.add("- Whole benchmark: %.0f s wall time.\n", info.total_seconds);
 }
 
+// An error cell of the cluster table: the peer's error, with its count in
+// brackets where it is more than 1 % off the cut's.
+std::string cluster_peer_cell(const PeerCase& c, std::int64_t triangles) {
+  std::string cell = c.runs.empty() ? "skipped" : !c.all_ok() ? c.runs[0].message : peer_error_cell(c);
+  if (c.topology && std::abs(double(c.topology->triangles) - double(triangles)) > 0.01 * double(triangles))
+    cell += " [" + std::to_string(c.topology->triangles) + "]";
+  return cell;
+}
+
+double cluster_build_ratio(const RunInfo& info) {
+  if (!all_ok(info.cluster_builds) || !all_ok(info.simplify_1)) return 0;
+  return median_seconds(info.cluster_builds) / median_seconds(info.simplify_1);
+}
+
+void report_clusters(Report& r, const RunInfo& info, const std::vector<ClusterLevel>& levels,
+                     const std::vector<Peer>& peers) {
+  r.add("## Cluster hierarchy beside the octree\n\n");
+  r.add("The model's second structure (Cignoni et al., *Batched Multi-Triangulation*, 2005; "
+        "lod/cluster_hierarchy.h), read through the LOD face (`LevelExtractor`, `compact_level`): %zu clusters "
+        "in %d levels over %lld triangles at full detail%s. Budgets at or above the full count are left out.\n\n",
+        info.clusters, info.cluster_levels, (long long)info.cluster_full,
+        info.same_full ? ", the same triangles as the octree's full detail (the peers' full mesh)"
+                       : ", NOT the octree's full-detail triangles (errors are still to the octree's full mesh)");
+  r.add("| cluster hierarchy | value |\n|---|---:|\n");
+  r.add("| build in the model build (`add_cluster_hierarchy`, s, median, range) | %s |\n",
+        spread_cell(info.builds, 4, 1, 3).c_str());
+  r.add("| build alone on the full mesh (own process, s) | %s |\n", spread_cell(info.cluster_builds, 0, 1, 3).c_str());
+  r.add("| `meshopt_simplify` of the same mesh to 1 %% (s) | %s |\n", spread_cell(info.simplify_1, 0, 1, 3).c_str());
+  const double ratio = cluster_build_ratio(info);
+  r.add("| build alone / `meshopt_simplify` to 1 %% | %s |\n", ratio > 0 ? (ratio_text(ratio) + "×").c_str() : "—");
+  const double peak = bench::peak_mib(info.cluster_builds);
+  r.add("| peak RSS of the build alone (MiB; over an idle child's %.0f) | %.0f (+%.0f) |\n", info.baseline_mib, peak,
+        std::max(0.0, peak - info.baseline_mib));
+  r.add("| stored triangles / full | %zu / %lld = %s× |\n", info.stored_triangles, (long long)info.cluster_full,
+        ratio_text(double(info.stored_triangles) / double(info.cluster_full)).c_str());
+  r.add("| coarsest cut (triangles) | %lld |\n", (long long)info.coarsest);
+  const Outcome& v = info.view;
+  if (v.status == Outcome::ok) {
+    r.add("| view-dependent selection, %.0f cameras, %.0f px (`select_seconds`, ms: median; slowest camera) "
+          "| %.4f; %.4f |\n",
+          v.values[6], info.pixel_error, v.values[0] * 1e3, v.values[1] * 1e3);
+    r.add("| view-dependent cut: `extract_seconds` ms (median); triangles (median; min–max) | %.3f; %.0f (%.0f–%.0f) |\n",
+          v.values[2] * 1e3, v.values[3], v.values[4], v.values[5]);
+  } else {
+    r.add("| view-dependent selection | %s |\n", v.message.c_str());
+  }
+  r.add("\n");
+
+  r.add("Uniform cuts (`LevelRequest::at_triangles(budget)`) against every peer at the cut's count, on the same "
+        "full mesh: error, two-sided mean to the full mesh in 1e-3 of its diagonal (a peer's count in brackets "
+        "where it is more than 1 %% off the cut's). Octree: its finest level with at most the cut's "
+        "triangles (its coarsest when none has), count in brackets. Ratio: the cut's error / meshopt_simplify's "
+        "(goal ≤ 1.25 up to %lldk); most faithful peer and cut / it: from the unrounded errors.\n\n",
+        (long long)(kSimplifyGoalMax / 1000));
+  peer_columns(r, {"budget", "cut triangles", "clusters", "threshold (1e-3 diag)", "cluster cut", "cut / meshopt_simplify",
+                   "most faithful peer", "cut / it", "octree"},
+               peers);
+  for (const ClusterLevel& l : levels) {
+    if (l.peers.empty()) continue;
+    const std::string own = l.fidelity ? error_text(error_1e3(*l.fidelity)) : l.measure_error.empty() ? "—" : "failed";
+    std::string to_simplify = "—";
+    if (const PeerCase* m = l.peer("meshopt_simplify"); m && m->fidelity && l.fidelity)
+      to_simplify = ratio_text(error_1e3(*l.fidelity) / error_1e3(*m->fidelity));
+    const std::string octree =
+        l.octree_fidelity ? error_text(error_1e3(*l.octree_fidelity)) + " [" + std::to_string(l.octree_triangles) + "]"
+                          : "—";
+    // The most faithful peer from unrounded errors (the finest cuts' round to 0).
+    const PeerCase* best = nullptr;
+    for (const PeerCase& c : l.peers)
+      if (c.fidelity && (!best || error_1e3(*c.fidelity) < error_1e3(*best->fidelity))) best = &c;
+    const std::string best_name = best ? best->peer->name : "—";
+    const std::string to_best =
+        best && l.fidelity && error_1e3(*best->fidelity) > 0 ? ratio_text(error_1e3(*l.fidelity) / error_1e3(*best->fidelity))
+                                                             : "—";
+    r.add("| %s | %lld | %zu | %s | **%s** | %s | %s | %s | %s |", l.label().c_str(), (long long)l.triangles, l.clusters,
+          fixed(1e3 * l.threshold / info.diagonal, 4).c_str(), own.c_str(), to_simplify.c_str(), best_name.c_str(),
+          to_best.c_str(), octree.c_str());
+    for (const PeerCase& c : l.peers) r.add(" %s |", cluster_peer_cell(c, l.triangles).c_str());
+    r.add("\n");
+  }
+  r.add("\nTopology and tails of the cuts (`mesh_topology` on the index buffer; p95 / max: the larger direction's, "
+        "1e-3 diag):\n\n");
+  r.add("| budget | cut triangles | vertices | boundary loops | non-manifold edges | components | p95 / max |\n"
+        "|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const ClusterLevel& l : levels)
+    r.add("| %s | %lld | %zu | %zu | %zu | %zu | %s |\n", l.label().c_str(), (long long)l.triangles,
+          l.mesh.positions.size(), l.topology.boundary_loops, l.topology.non_manifold_edges, l.topology.components,
+          l.fidelity ? tail_cell(*l.fidelity).c_str() : "—");
+  r.add("\nExtraction of the cuts (each level in its own process; `LevelCut::extract_seconds` and "
+        "`select_seconds`, median over at least --reps repetitions and 0.25 s):\n\n");
+  r.add("| cut | triangles | extract ms (median; min–max; reps) | select ms | M triangles/s "
+        "| extract + `compact_level` ms |\n|---:|---:|---:|---:|---:|---:|\n");
+  for (const ClusterLevel& l : levels) {
+    const Values& x = l.extraction.values;
+    if (l.extraction.status != Outcome::ok) {
+      r.add("| %s | %lld | %s | — | — | — |\n", l.label().c_str(), (long long)l.triangles, l.extraction.message.c_str());
+      continue;
+    }
+    r.add("| %s | %lld | %.3f (%.3f–%.3f; %.0f) | %.4f | %.1f | %.3f |\n", l.label().c_str(), (long long)l.triangles,
+          x[0] * 1e3, x[1] * 1e3, x[2] * 1e3, x[4], x[3] * 1e3, double(l.triangles) / x[0] / 1e6, x[6] * 1e3);
+  }
+  r.add("\n");
+}
+
+std::vector<Goal> evaluate_cluster_goals(const std::vector<ClusterLevel>& levels, const RunInfo& info) {
+  std::vector<Goal> goals(7);
+  goals[0].statement = "Clusters: uniform cut's error ≤ 1.25× meshopt_simplify's at every budget from 1k to " +
+                       std::to_string(kSimplifyGoalMax / 1000) + "k";
+  goals[1].statement = "Clusters: uniform cut's error below meshopt_simplifySloppy's, VTK QuadricClustering's and "
+                       "Open3D VertexClustering's at every budget from 1k to " +
+                       std::to_string(kClusteringGoalMax / 1000) + "k";
+  for (const ClusterLevel& l : levels) {
+    if (l.budget == 0 || !l.fidelity) continue;
+    for (const PeerCase& c : l.peers) {
+      if (!c.fidelity) continue;
+      const double ratio = error_1e3(*l.fidelity) / error_1e3(*c.fidelity);
+      if (c.peer->name == "meshopt_simplify" && l.budget <= kSimplifyGoalMax) {
+        goals[0].measured = true;
+        if (ratio > 1.25) goals[0].misses.push_back(l.label() + ": " + ratio_text(ratio) + "×");
+      }
+      if (c.peer->clustering && l.budget <= kClusteringGoalMax) {
+        goals[1].measured = true;
+        if (ratio >= 1) goals[1].misses.push_back(l.label() + " vs " + c.peer->name + ": " + ratio_text(ratio) + "×");
+      }
+    }
+  }
+  goals[2].statement = "Clusters: coarsest cut ≤ 256 triangles";
+  goals[2].measured = info.coarsest > 0;
+  if (info.coarsest > 256) goals[2].misses.push_back(std::to_string(info.coarsest) + " triangles");
+  goals[3].statement = "Clusters: build ≤ 6× meshopt_simplify of the same mesh to 1 %";
+  const double build = cluster_build_ratio(info);
+  goals[3].measured = build > 0;
+  if (build > 6) goals[3].misses.push_back(ratio_text(build) + "×");
+  goals[4].statement = "Clusters: stored triangles ≤ 2.2× the full mesh's";
+  goals[4].measured = info.cluster_full > 0;
+  const double storage = double(info.stored_triangles) / double(std::max<std::int64_t>(1, info.cluster_full));
+  if (storage > 2.2) goals[4].misses.push_back(ratio_text(storage) + "×");
+  goals[5].statement = "Clusters: view-dependent selection ≤ 0.1 ms (median over the cameras)";
+  goals[5].measured = info.view.status == Outcome::ok;
+  if (goals[5].measured && info.view.values[0] > 1e-4)
+    goals[5].misses.push_back(fixed(info.view.values[0] * 1e3, 3) + " ms");
+  goals[6].statement = "Clusters: extraction ≥ 200 M triangles/s at full detail and at every budget from " +
+                       std::to_string(kRateGoalMin / 1000) + "k";
+  for (const ClusterLevel& l : levels) {
+    if (l.budget != 0 && l.budget < kRateGoalMin) continue;
+    if (l.extraction.status != Outcome::ok) {
+      goals[6].misses.push_back(l.label() + ": " + l.extraction.message);
+      continue;
+    }
+    goals[6].measured = true;
+    const double rate = double(l.triangles) / l.extract_seconds() / 1e6;
+    if (rate < 200) goals[6].misses.push_back(l.label() + ": " + fixed(rate, 1) + " M/s");
+  }
+  return goals;
+}
+
 std::string make_report(const Settings& s, const RunInfo& info, const std::vector<Level>& levels,
-                        const std::vector<Peer>& peers) {
+                        const std::vector<ClusterLevel>& cluster_levels, const std::vector<Peer>& peers) {
   Report r;
-  r.add("# LOD benchmark: scan2lod's marching-cube octree against mesh simplifiers\n\n");
+  r.add("# LOD benchmark: scan2lod's marching-cube octree and cluster hierarchy against mesh simplifiers\n\n");
   r.add_text(run_header_line(info.load_at_start, info.load_at_end) + "\n\n");
   r.add("Command: `%s`  \n", info.command_line.c_str());
   r.add_text(openmp_line());
@@ -857,8 +1181,11 @@ std::string make_report(const Settings& s, const RunInfo& info, const std::vecto
   r.add("Input: `%s` (%zu oriented points), R = %d\n\n", s.input.c_str(), info.points, s.resolution);
   report_build(r, info);
   report_extraction(r, levels, info.expansions);
-  report_goals(r, evaluate_goals(levels, info));
+  std::vector<Goal> goals = evaluate_goals(levels, info);
+  for (Goal& g : evaluate_cluster_goals(cluster_levels, info)) goals.push_back(std::move(g));
+  report_goals(r, goals);
   report_matrices(r, levels, peers);
+  report_clusters(r, info, cluster_levels, peers);
   report_open_cut(r, levels);
   report_peers(r, levels, s.timeout);
   report_notes(r, s, info, peers, levels);
@@ -924,12 +1251,12 @@ int main(int argc, char** argv) {
       const TimedModel t = build_model_timed(points, s.resolution);
       if (run == 0) save_model(model_path, t.model);
       return Values{t.reconstruct_seconds, t.octree_seconds, t.numbering_seconds,
-                    double(t.reconstruction.mesh.triangles.size()), 0, 0, 0, 0};
+                    double(t.reconstruction.mesh.triangles.size()), t.cluster_seconds, 0, 0, 0};
     }, s.timeout);
     std::fprintf(stderr, "  %s, peak %.0f MiB\n",
                  o.status == Outcome::ok
-                     ? format("reconstruct %.2f s, octree %.2f s, numbering %.2f s", o.values[0], o.values[1],
-                              o.values[2]).c_str()
+                     ? format("reconstruct %.2f s, octree %.2f s, numbering %.2f s, clusters %.2f s", o.values[0],
+                              o.values[1], o.values[2], o.values[4]).c_str()
                      : o.message.c_str(),
                  o.peak_mib);
     info.builds.push_back(o);
@@ -939,37 +1266,43 @@ int main(int argc, char** argv) {
     }
   }
   const LodModel model = load_model(model_path);
-  info.depth = model.tree.depth;
-  info.nodes = model.tree.size();
-  info.expansions = model.lod.full();
-  for (std::size_t n = 0; n < model.tree.size(); ++n) info.leaves += model.tree.is_leaf(n);
+  require_structure(model, LodStructure::kOctree, model_path);
+  require_structure(model, LodStructure::kClusters, model_path);
+  {
+    const McOctree& tree = model.octree->tree;  // counts for the report
+    info.depth = tree.depth;
+    info.nodes = tree.size();
+    info.expansions = model.octree->lod.full();
+    for (std::size_t n = 0; n < tree.size(); ++n) info.leaves += tree.is_leaf(n);
+  }
 
   // The levels, and the full mesh every peer starts from, on one thread:
   // extract_lod runs big levels on an OpenMP team otherwise, and the parent
   // must not start libgomp's pool before its last fork.
   std::vector<Level> levels;
   TriangleMesh full;
+  std::vector<Triangle> octree_full;  // the octree's full detail, into the model's vertices
   {
     const int threads = omp_get_max_threads();
     omp_set_num_threads(1);
-    std::vector<std::uint8_t> expanded;
-    std::vector<Triangle> triangles;
+    const LodArray& lod = model.octree->lod;
+    LevelExtractor octree(model, LodStructure::kOctree);
     for (const double p : percents) {
       Level l;
       l.percent = p;
-      l.priority = priority_for_percent(model.lod, p);
-      extract_lod(model.tree, model.lod, l.priority, &expanded, &triangles);
-      l.triangles = std::int64_t(triangles.size());
-      l.accumulated = model.lod.accumulated[l.priority];
-      l.mesh = compact_lod(model.tree, triangles);
+      const LevelCut& cut = octree.extract(LevelRequest::at_percent(p));
+      l.priority = cut.priority;
+      l.triangles = std::int64_t(cut.triangles.size());
+      l.accumulated = lod.accumulated[l.priority];
+      l.mesh = compact_level(model, cut.triangles);
       l.vertices = l.mesh.positions.size();
       l.topology = mesh_topology(l.mesh);
-      if (l.priority == model.lod.full()) full = l.mesh;
+      if (l.priority == lod.full()) full = l.mesh, octree_full = cut.triangles;
       levels.push_back(std::move(l));
     }
     if (full.triangles.empty()) {
-      extract_lod(model.tree, model.lod, model.lod.full(), &expanded, &triangles);
-      full = compact_lod(model.tree, triangles);
+      octree_full = octree.extract(LevelRequest::at_priority(lod.full())).triangles;
+      full = compact_level(model, octree_full);
     }
     omp_set_num_threads(threads);  // for the children; no thread has started here
   }
@@ -977,6 +1310,45 @@ int main(int argc, char** argv) {
   info.full_vertices = full.positions.size();
   info.diagonal = bounds(full.positions).diagonal();
   info.clustering_cap = max_clustering_divisions(bounds(full.positions));
+
+  // The cluster hierarchy's cuts, through the face; its full detail as a mesh
+  // (with normals and colours) for building it alone. No OpenMP in any of it.
+  std::vector<ClusterLevel> cluster_levels;
+  TriangleMesh cluster_full_mesh;
+  {
+    LevelExtractor clusters(model, LodStructure::kClusters);
+    info.clusters = model.clusters->size();
+    info.cluster_levels = clusters.levels();
+    info.stored_triangles = model.clusters->triangles.size();
+    info.cluster_full = clusters.full_triangles();
+    info.coarsest = clusters.coarsest_triangles();
+    const std::vector<Triangle> cluster_full = clusters.extract(LevelRequest::at_percent(100)).triangles;
+    info.same_full = same_triangles(cluster_full, octree_full);
+    cluster_full_mesh = compact_level(model, cluster_full);
+    LevelExtractor octree(model, LodStructure::kOctree);
+    std::vector<std::int64_t> budgets = {0};
+    for (const std::int64_t b : kClusterBudgets)
+      if (b < info.cluster_full) budgets.push_back(b);
+    for (const std::int64_t b : budgets) {
+      ClusterLevel l;
+      l.budget = b;
+      const LevelCut& cut = clusters.extract(cluster_request(l));
+      l.triangles = std::int64_t(cut.triangles.size());
+      l.clusters = cut.clusters;
+      l.threshold = cut.error;
+      l.mesh = compact_level(model, cut.triangles);
+      l.topology = mesh_topology(l.mesh);
+      if (b != 0) {
+        const int threads = omp_get_max_threads();
+        omp_set_num_threads(1);  // extract_lod: no OpenMP team in the parent
+        const LevelCut& o = octree.extract(LevelRequest::at_triangles(l.triangles));
+        l.octree_triangles = std::int64_t(o.triangles.size());
+        l.octree_mesh = compact_level(model, o.triangles);
+        omp_set_num_threads(threads);
+      }
+      cluster_levels.push_back(std::move(l));
+    }
+  }
   info.baseline_mib = run_in_child([] { return Values{}; }, 0).peak_mib;
 
   // 2. Extraction, one child per level.
@@ -994,7 +1366,7 @@ int main(int argc, char** argv) {
   // 3. Peers at every level below full detail.
   const std::vector<Peer> peers = make_peers();
   for (Level& l : levels) {
-    if (l.priority == model.lod.full()) continue;
+    if (l.priority == model.octree->lod.full()) continue;
     for (const Peer& p : peers) {
       PeerCase c;
       c.peer = &p;
@@ -1017,6 +1389,86 @@ int main(int argc, char** argv) {
           [&](int run, const Outcome& o) {
             if (run == 0 && o.status == Outcome::ok) c.setting = o.values[1], c.rejected = o.values[2];
             std::fprintf(stderr, "  run %d: %s, peak %.0f MiB\n", run + 1,
+                         o.status == Outcome::ok ? format("%.3f s, %.0f triangles", o.values[0], o.values[3]).c_str()
+                                                 : o.message.c_str(),
+                         o.peak_mib);
+          });
+      l.peers.push_back(std::move(c));
+    }
+  }
+  // 3b. The cluster hierarchy: build alone, meshopt_simplify to 1 %, extraction,
+  // view-dependent selection, and the peers at every cut's count (one run each:
+  // what is compared is their error).
+  std::fprintf(stderr, "cluster hierarchy alone on the full mesh (%zu triangles)\n", cluster_full_mesh.triangles.size());
+  info.cluster_builds = run_repeated(
+      [&](int) {
+        LodModel alone;
+        const auto start = Clock::now();
+        add_cluster_hierarchy(&alone, cluster_full_mesh, /*shares_vertices=*/false, ClusterOptions{});
+        const double seconds = seconds_since(start);
+        return Values{seconds, double(alone.clusters->triangles.size()), double(alone.clusters->size()), 0, 0, 0, 0, 0};
+      },
+      s.runs, s.repeat_under, s.timeout, [](int run, const Outcome& o) {
+        std::fprintf(stderr, "  run %d: %s, peak %.0f MiB\n", run + 1,
+                     o.status == Outcome::ok ? format("%.3f s", o.values[0]).c_str() : o.message.c_str(), o.peak_mib);
+      });
+  std::fprintf(stderr, "meshopt_simplify of the same mesh to 1 %%\n");
+  info.simplify_1 = run_repeated(
+      [&](int) {
+        PeerRun pr;
+        const TriangleMesh out =
+            run_meshopt(cluster_full_mesh, std::int64_t(cluster_full_mesh.triangles.size() / 100), false, &pr);
+        return Values{pr.seconds, double(out.triangles.size()), 0, 0, 0, 0, 0, 0};
+      },
+      s.runs, s.repeat_under, s.timeout, [](int run, const Outcome& o) {
+        std::fprintf(stderr, "  run %d: %s\n", run + 1,
+                     o.status == Outcome::ok ? format("%.3f s", o.values[0]).c_str() : o.message.c_str());
+      });
+  for (ClusterLevel& l : cluster_levels) {
+    std::fprintf(stderr, "clusters: extract %s (%lld triangles)\n", l.label().c_str(), (long long)l.triangles);
+    l.extraction = run_in_child([&] { return measure_cluster_extraction(model, cluster_request(l), s.reps); },
+                                s.timeout);
+    if (l.extraction.status == Outcome::ok)
+      std::fprintf(stderr, "  %.3f ms, %.1f M triangles/s\n", l.extract_seconds() * 1e3,
+                   double(l.triangles) / l.extract_seconds() / 1e6);
+    else
+      std::fprintf(stderr, "  %s\n", l.extraction.message.c_str());
+  }
+  {
+    const std::vector<CameraView> cameras = orbit_cameras(model_bounds(model), 48);
+    info.view_reps = std::max(5, s.reps / 5);
+    std::fprintf(stderr, "clusters: view-dependent selection at %zu cameras\n", cameras.size());
+    info.view = run_in_child([&] { return measure_view_selection(model, cameras, info.pixel_error, info.view_reps); },
+                             s.timeout);
+    if (info.view.status == Outcome::ok)
+      std::fprintf(stderr, "  select %.4f ms median, %.4f ms slowest; %.0f triangles median\n",
+                   info.view.values[0] * 1e3, info.view.values[1] * 1e3, info.view.values[3]);
+    else
+      std::fprintf(stderr, "  %s\n", info.view.message.c_str());
+  }
+  for (ClusterLevel& l : cluster_levels) {
+    if (l.budget == 0) continue;
+    for (const Peer& p : peers) {
+      PeerCase c;
+      c.peer = &p;
+      c.mesh_path = work_path("cluster" + std::to_string(&l - cluster_levels.data()) + "_" +
+                              std::to_string(&p - peers.data()) + ".bin");
+      if (p.name.find(s.only) == std::string::npos) {
+        l.peers.push_back(std::move(c));
+        continue;
+      }
+      std::fprintf(stderr, "%s at the %s cut (%lld triangles)\n", p.name.c_str(), l.label().c_str(),
+                   (long long)l.triangles);
+      c.runs = run_repeated(
+          [&](int) {
+            PeerRun pr;
+            const TriangleMesh out = p.work(full, l.triangles, &pr);
+            dump_mesh(c.mesh_path, out);
+            return Values{pr.seconds, pr.setting, pr.rejected, double(out.triangles.size()), 0, 0, 0, 0};
+          },
+          1, 0, s.timeout, [&](int, const Outcome& o) {
+            if (o.status == Outcome::ok) c.setting = o.values[1], c.rejected = o.values[2];
+            std::fprintf(stderr, "  %s, peak %.0f MiB\n",
                          o.status == Outcome::ok ? format("%.3f s, %.0f triangles", o.values[0], o.values[3]).c_str()
                                                  : o.message.c_str(),
                          o.peak_mib);
@@ -1053,9 +1505,29 @@ int main(int argc, char** argv) {
       }
     }
   }
+  for (ClusterLevel& l : cluster_levels) {
+    if (l.budget == 0) continue;  // the full detail: error 0
+    std::fprintf(stderr, "measuring the %s cluster cut\n", l.label().c_str());
+    try {
+      l.fidelity = compare_surfaces(l.mesh, full, compare);
+      l.octree_fidelity = compare_surfaces(l.octree_mesh, full, compare);
+    } catch (const std::exception& e) {
+      l.measure_error = e.what();
+    }
+    for (PeerCase& c : l.peers) {
+      if (c.runs.empty() || c.runs[0].status != Outcome::ok) continue;
+      try {
+        const TriangleMesh mesh = undump_mesh(c.mesh_path);
+        c.topology = mesh_topology(mesh);
+        c.fidelity = compare_surfaces(mesh, full, compare);
+      } catch (const std::exception& e) {
+        c.measure_error = e.what();
+      }
+    }
+  }
   info.total_seconds = seconds_since(benchmark_start);
 
-  const std::string report = make_report(s, info, levels, peers);
+  const std::string report = make_report(s, info, levels, cluster_levels, peers);
   std::fwrite(report.data(), 1, report.size(), stdout);
   if (s.write) {
     const fs::path path = fs::path(SCAN2LOD_SOURCE_DIR) / "bench" / "lod" / "REPORT.md";

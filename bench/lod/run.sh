@@ -12,7 +12,7 @@
 #   --samples N, --seed S, --only TEXT, --input FILE (see --help)
 #
 # Examples:
-#   bench/lod/run.sh --build build-lod --quick    # R=128, 3 levels, ~30 s
+#   bench/lod/run.sh --build build-lod --quick    # R=128, 3 levels, 7 cluster cuts, ~5 min on 2 cores
 #   bench/lod/run.sh --build build-lod --write    # R=256, 7 levels (see REPORT.md for the time)
 set -euo pipefail
 

@@ -41,6 +41,7 @@
 #include "io/mesh_file.h"
 #include "lod/extract.h"
 #include "lod/lod_array.h"
+#include "lod/lod_model.h"
 #include "measure/topology.h"
 
 #include <CLI/CLI.hpp>
@@ -241,21 +242,21 @@ std::size_t largest(const std::vector<Level>& levels, F value) {
 int run_case(const std::string& name, int resolution, const OrientedPoints& points, double load_seconds,
              const std::optional<Expectation>& expect) {
   const auto start = Clock::now();
-  const LodModel model = build_model_timed(points, resolution).model;
+  // The octree alone: this sweep checks its levels and accumulation table.
+  const LodModel model = build_model_timed(points, resolution, /*clusters=*/false).model;
   const double build_seconds = load_seconds + seconds_since(start);
-  const LodArray& lod = model.lod;
+  const LodArray& lod = model.octree->lod;
+  LevelExtractor extractor(model, LodStructure::kOctree);
 
   std::vector<Level> levels;
-  std::vector<std::uint8_t> scratch;
-  std::vector<Triangle> triangles;
   for (const double percent : kPercents) {
     Level l;
     l.percent = percent;
-    l.priority = priority_for_percent(lod, percent);
-    extract_lod(model.tree, lod, l.priority, &scratch, &triangles);
-    l.extracted = triangles.size();
+    const LevelCut& cut = extractor.extract(LevelRequest::at_percent(percent));
+    l.priority = cut.priority;
+    l.extracted = cut.triangles.size();
     l.accumulated = lod.accumulated[l.priority];
-    const TriangleMesh mesh = compact_lod(model.tree, triangles);
+    const TriangleMesh mesh = compact_level(model, cut.triangles);
     l.topology = mesh_topology(mesh);
     l.folded = folded_edges(mesh);
     l.singular = singular_vertices(mesh);
@@ -307,10 +308,10 @@ int run_case(const std::string& name, int resolution, const OrientedPoints& poin
   for (int i = 0; i < 40 && !offered.empty(); ++i) sampled.push_back(offered[rng() % offered.size()]);
   for (int i = 0; i < 20; ++i) sampled.push_back(rng() % (lod.full() + 1));
   for (const std::size_t priority : sampled) {
-    extract_lod(model.tree, lod, priority, &scratch, &triangles);
-    if (std::int64_t(triangles.size()) != lod.accumulated[priority])
+    const std::size_t extracted = extractor.extract(LevelRequest::at_priority(priority)).triangles.size();
+    if (std::int64_t(extracted) != lod.accumulated[priority])
       verdict.fail(kAccumulation, format("sampled priority %zu: table %lld, extracted %zu", priority,
-                                         (long long)lod.accumulated[priority], triangles.size()));
+                                         (long long)lod.accumulated[priority], extracted));
   }
 
   std::printf("RESULT\tname=%s\tR=%d\tpass=%d\tfirst_fail=%s", name.c_str(), resolution, int(verdict.pass()),
@@ -329,7 +330,7 @@ int run_case(const std::string& name, int resolution, const OrientedPoints& poin
               largest(levels, [](const Level& l) { return l.topology.degenerate_triangles; }),
               largest(levels, [](const Level& l) { return l.folded; }),
               largest(levels, [](const Level& l) { return l.singular; }));
-  std::printf("\tnodes=%zu\toffered=%zu\tsampled=%zu\tbuild_s=%.1f\n", model.tree.size(), offered.size(),
+  std::printf("\tnodes=%zu\toffered=%zu\tsampled=%zu\tbuild_s=%.1f\n", model.octree->tree.size(), offered.size(),
               sampled.size(), build_seconds);
   return 0;
 }

@@ -4,7 +4,8 @@
 #
 #   tests/fuzz/build.sh [model] [SECONDS]
 #       the .mco reader (model_fuzzer.cpp): build into build-fuzz/, make a seed
-#       model (the bunny at R = 16, with build/bin/scan2lod) and fuzz for SECONDS
+#       model (the bunny at R = 16 with both LOD structures, with build/bin/scan2lod)
+#       and fuzz for SECONDS
 #       (default 300) on all cores. `tests/fuzz/build.sh 300` still means this.
 #   tests/fuzz/build.sh inputs [SECONDS]
 #       the input readers (inputs_fuzzer.cpp: range-grid PLY, .conf, PCD, meshes):
@@ -35,10 +36,12 @@ cores="$(nproc)"
 
 if [[ "$target" == model ]]; then
   mkdir -p "$out/corpus"
+  # lod_model.cpp (the face) builds hierarchies too: the cluster sources, METIS and meshoptimizer come along.
   sources=(lod/model_file.cpp lod/extract.cpp lod/transition.cpp lod/lod_array.cpp lod/lod_cursor.cpp
-           core/mesh_edges.cpp core/types.cpp reconstruct/cube_table.cpp io/atomic_file.cpp)
+           lod/lod_model.cpp lod/cluster_cut.cpp lod/cluster_hierarchy.cpp lod/cluster_partition.cpp
+           lod/group_simplify.cpp core/mesh_edges.cpp core/types.cpp reconstruct/cube_table.cpp io/atomic_file.cpp)
   clang++ -std=c++17 -O1 -g -fopenmp -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-    -I"$repo" -I/usr/include/eigen3 "$here/model_fuzzer.cpp" "${sources[@]/#/$repo/}" -o "$out/model_fuzzer"
+    -I"$repo" -I/usr/include/eigen3 "$here/model_fuzzer.cpp" "${sources[@]/#/$repo/}" -lmetis -lmeshoptimizer -o "$out/model_fuzzer"
   seed="$out/seed16.mco"
   if [[ ! -f "$seed" ]]; then
     "$repo/build/bin/scan2lod" build "$repo/data/bunny/bun.conf" -o "$seed" --resolution 16 --quiet
@@ -47,6 +50,8 @@ if [[ "$target" == model ]]; then
     { printf 'R'; cat "$out/seed32.mco"; } > "$out/corpus/raw32"
     printf 'S' > "$out/corpus/none"
   fi
+  # The seed with both structures as this reader writes it (model_fuzzer.cpp).
+  MODEL_FUZZ_SEED="$seed" MODEL_FUZZ_WRITE_SEED="$out/corpus/raw16both" "$out/model_fuzzer" -runs=0 >/dev/null 2>&1
   cd "$out"
   MODEL_FUZZ_SEED="$seed" ./model_fuzzer -max_total_time="$seconds" -jobs="$cores" -workers="$cores" \
     -max_len=600000 "$@" corpus

@@ -1,5 +1,7 @@
 // libFuzzer target for the .mco reader: whatever decode_model accepts must
-// extract (extract_lod, compact_lod, LodCursor) without reading out of bounds.
+// give levels of each LOD structure it holds through the face (lod/lod_model.h:
+// LevelExtractor by percent, triangles, priority, error and camera, then
+// compact_level), and the octree's LodCursor, without reading out of bounds.
 // Built only with clang (tests/fuzz/build.sh), under AddressSanitizer and UBSan.
 //
 // An input is either
@@ -7,14 +9,20 @@
 //   damage reaches the structure checks behind them, or
 // - 'S' + edits of 9 bytes (array, index, value) applied to a seed model,
 //   which is then encoded (correct checksums) and read back: damage that is
-//   consistent at the byte level and wrong in meaning.
-// The seed model is $MODEL_FUZZ_SEED (a small .mco, e.g. the bunny at R = 16).
+//   consistent at the byte level and wrong in meaning, in the octree's arrays,
+//   the shared vertices or the cluster hierarchy's.
+// The seed model is $MODEL_FUZZ_SEED (a small .mco with both structures, e.g.
+// the bunny at R = 16 from scan2lod build, whose default is both).
 #include "core/error.h"
 #include "lod/extract.h"
 #include "lod/lod_cursor.h"
+#include "lod/lod_model.h"
 #include "lod/model_file.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <vector>
@@ -54,7 +62,33 @@ const LodModel& seed() {
       std::fprintf(stderr, "model_fuzzer: set MODEL_FUZZ_SEED to a small .mco\n");
       std::abort();
     }
-    return load_model(path);
+    LodModel m = load_model(path);
+    // Both structures, and a hierarchy of several DAG levels even on a small
+    // seed (or an octree-only 2.x one): small clusters over the octree's
+    // full-detail mesh, which indexes the shared vertices as they are.
+    if (m.octree && (!m.clusters || m.clusters->levels() < 3)) {
+      LevelExtractor full(m, LodStructure::kOctree);
+      TriangleMesh mesh;
+      mesh.positions = m.vertices.positions;
+      mesh.triangles = full.extract(LevelRequest::at_percent(100)).triangles;
+      ClusterOptions options;
+      options.cluster_triangles = 16;
+      options.group_clusters = 4;
+      options.threads = 1;
+      add_cluster_hierarchy(&m, mesh, true, options);
+    }
+    if (!m.octree || !m.clusters) {
+      std::fprintf(stderr, "model_fuzzer: the seed needs an octree (scan2lod build --structure both)\n");
+      std::abort();
+    }
+    // The seed as this reader writes it, for a raw ('R') corpus entry.
+    if (const char* out = std::getenv("MODEL_FUZZ_WRITE_SEED")) {
+      const std::vector<std::uint8_t> bytes = encode_model(m);
+      FILE* f = std::fopen(out, "wb");
+      if (!f || std::fputc('R', f) == EOF || std::fwrite(bytes.data(), 1, bytes.size(), f) != bytes.size()) std::abort();
+      std::fclose(f);
+    }
+    return m;
   }();
   return model;
 }
@@ -72,54 +106,152 @@ void edit(std::vector<T>& v, std::uint32_t index, std::uint32_t value) {
   else words[at] = std::uint8_t(value);
 }
 
+// Drops 1 to 4 elements from the end (all of a shorter array).
+template <class T>
+void shrink(std::vector<T>& v, std::uint32_t index) {
+  v.resize(v.size() - std::min<std::size_t>(v.size(), 1 + index % 4));
+}
+
 void apply(LodModel& m, const std::uint8_t* op) {
   std::uint32_t index, value;
   std::memcpy(&index, op + 1, 4);
   std::memcpy(&value, op + 5, 4);
-  McOctree& t = m.tree;
-  switch (op[0] % 26) {
-    case 0: edit(t.keys, index, value); break;
-    case 1: edit(t.levels, index, value); break;
-    case 2: edit(t.parents, index, value); break;
-    case 3: edit(t.first_child, index, value); break;
-    case 4: edit(t.child_counts, index, value); break;
-    case 5: edit(t.cases, index, value); break;
-    case 6: edit(t.edge_vertices, index, value); break;
-    case 7: edit(t.first_triangle, index, value); break;
-    case 8: edit(t.triangle_counts, index, value); break;
-    case 9: edit(t.metrics, index, value); break;
-    case 10: edit(t.boundary_inside, index, value); break;
-    case 11: edit(t.sub_edge_vertices, index, value); break;
-    case 12: edit(t.centre_vertices, index, value); break;
-    case 13: edit(t.neighbours, index, value); break;
-    case 14: edit(t.triangles, index, value); break;
-    case 15: edit(t.patch_triangles, index, value); break;
-    case 16: edit(t.patch_group_first, index, value); break;
-    case 17: edit(t.patch_needs_first, index, value); break;
-    case 18: edit(t.patch_needs, index, value); break;
-    case 19: edit(t.positions, index, value); break;
-    case 20: edit(m.lod.order, index, value); break;
-    case 21: edit(m.lod.accumulated, index, value); break;
-    case 22: m.lod.pinned = value; break;
-    case 23: t.grid.resolution = std::int32_t(value); break;
-    case 24: t.depth = std::int32_t(value); break;
-    case 25: t.mesh_vertices = value; break;
+  const unsigned kind = op[0] % 40;
+  if (kind < 26 && !m.octree) return;
+  if (kind >= 30 && kind < 39 && !m.clusters) return;
+  McOctree* t = m.octree ? &m.octree->tree : nullptr;
+  LodArray* lod = m.octree ? &m.octree->lod : nullptr;
+  ClusterHierarchy* h = m.clusters ? &*m.clusters : nullptr;
+  switch (kind) {
+    // The octree's arrays.
+    case 0: edit(t->keys, index, value); break;
+    case 1: edit(t->levels, index, value); break;
+    case 2: edit(t->parents, index, value); break;
+    case 3: edit(t->first_child, index, value); break;
+    case 4: edit(t->child_counts, index, value); break;
+    case 5: edit(t->cases, index, value); break;
+    case 6: edit(t->edge_vertices, index, value); break;
+    case 7: edit(t->first_triangle, index, value); break;
+    case 8: edit(t->triangle_counts, index, value); break;
+    case 9: edit(t->metrics, index, value); break;
+    case 10: edit(t->boundary_inside, index, value); break;
+    case 11: edit(t->sub_edge_vertices, index, value); break;
+    case 12: edit(t->centre_vertices, index, value); break;
+    case 13: edit(t->neighbours, index, value); break;
+    case 14: edit(t->triangles, index, value); break;
+    case 15: edit(t->patch_triangles, index, value); break;
+    case 16: edit(t->patch_group_first, index, value); break;
+    case 17: edit(t->patch_needs_first, index, value); break;
+    case 18: edit(t->patch_needs, index, value); break;
+    case 19: {  // the cube size, as a chosen float
+      float f;
+      std::memcpy(&f, &value, 4);
+      t->grid.cube_size = f;
+      break;
+    }
+    case 20: edit(lod->order, index, value); break;
+    case 21: edit(lod->accumulated, index, value); break;
+    case 22: lod->pinned = value; break;
+    case 23: t->grid.resolution = std::int32_t(value); break;
+    case 24: t->depth = std::int32_t(value); break;
+    case 25: t->mesh_vertices = value; break;
+    // The shared vertices.
+    case 26: edit(m.vertices.positions, index, value); break;
+    case 27: edit(m.vertices.normals, index, value); break;
+    case 28:
+      shrink(m.vertices.positions, index);
+      break;
+    case 29: edit(m.vertices.colors, index, value); break;
+    // The cluster hierarchy's arrays (Cluster and GroupBound by 4-byte words:
+    // first triangle, count/level/reserved, own and parent group; centre,
+    // radius and error).
+    case 30: edit(h->clusters, index, value); break;
+    case 31: edit(h->triangles, index, value); break;
+    case 32: edit(h->groups, index, value); break;
+    case 33: h->full_triangles = std::int64_t(std::int32_t(value)); break;
+    case 34: m.cluster_vertex_first = value; break;
+    case 35: m.cluster_vertex_count = value; break;
+    case 36:
+      shrink(h->clusters, index);
+      break;
+    case 37:
+      shrink(h->groups, index);
+      break;
+    case 38: {  // a group's error set to a chosen float (NaN, 0, tiny, huge, negative)
+      if (h->groups.empty()) break;
+      float f;
+      std::memcpy(&f, &value, 4);
+      h->groups[index % h->groups.size()].error = f;
+      break;
+    }
+    // Structures dropped: a model of one.
+    case 39:
+      if (index % 2) m.octree.reset();
+      else m.clusters.reset();
+      break;
   }
+}
+
+// A level's indices must name the model's vertices; compact_level reads them.
+void check_level(const LodModel& m, const std::vector<Triangle>& triangles) {
+  for (const Triangle& t : triangles)
+    for (const std::int32_t v : t)
+      if (v < 0 || std::size_t(v) >= m.vertices.size()) {
+        std::fprintf(stderr, "model_fuzzer: a level names vertex %d of %zu\n", v, m.vertices.size());
+        std::abort();
+      }
+  compact_level(m, triangles);
 }
 
 void extract_everything(const LodModel& m) {
-  std::vector<std::uint8_t> flags;
-  std::vector<Triangle> triangles;
-  const std::size_t full = m.lod.full();
-  for (const std::size_t p : {std::size_t(0), m.lod.pinned, full / 3, full / 2, full}) {
-    extract_lod(m.tree, m.lod, p, &flags, &triangles);
-    compact_lod(m.tree, triangles);
+  if (m.octree) {
+    LevelExtractor octree(m, LodStructure::kOctree);
+    const LodArray& lod = m.octree->lod;
+    const std::size_t full = lod.full();
+    for (const double percent : {0.0, 1.0, 33.0, 50.0, 100.0})
+      check_level(m, octree.extract(LevelRequest::at_percent(percent)).triangles);
+    for (const std::size_t p : {std::size_t(0), lod.pinned, full / 3, full / 2, full})
+      if (p <= full) check_level(m, octree.extract(LevelRequest::at_priority(p)).triangles);
+    check_level(m, octree.extract(LevelRequest::at_triangles(octree.full_triangles() / 2)).triangles);
+    octree.triangle_levels();
+    LodCursor cursor(m.octree->tree, lod);
+    for (const std::size_t p : {full, full / 2, std::size_t(1), full / 3 + 1, std::size_t(0)}) {
+      cursor.move_to(p);
+      check_level(m, cursor.buffer());
+    }
   }
-  LodCursor cursor(m.tree, m.lod);
-  for (const std::size_t p : {full, full / 2, std::size_t(1), full / 3 + 1, std::size_t(0)}) cursor.move_to(p);
+  if (m.clusters) {
+    LevelExtractor clusters(m, LodStructure::kClusters);
+    for (const double percent : {0.0, 1.0, 33.0, 50.0, 100.0}) {
+      check_level(m, clusters.extract(LevelRequest::at_percent(percent)).triangles);
+      clusters.triangle_levels();
+    }
+    check_level(m, clusters.extract(LevelRequest::at_triangles(clusters.full_triangles() / 3)).triangles);
+    const std::vector<GroupBound>& groups = m.clusters->groups;
+    const double some = groups.empty() ? 1.0 : double(groups[groups.size() / 2].error);
+    for (const double error : {0.0, some, 1e30, -1.0, double(NAN)})
+      check_level(m, clusters.extract(LevelRequest::at_error(error)).triangles);
+    const Aabb box = model_bounds(m);
+    const Vec3f centre = box.empty() ? Vec3f::Zero() : Vec3f(0.5f * (box.min + box.max));
+    const float far = box.empty() ? 1.f : 2.f * box.diagonal() + 1.f;
+    CameraView camera;
+    camera.target = centre;
+    // Far off, inside every sphere (next to the centre), and from below.
+    for (const Vec3f& eye : {Vec3f(centre + Vec3f(0, 0, far)), Vec3f(centre + Vec3f(0, 0, 1e-3f * far)),
+                             Vec3f(centre - Vec3f(far, far, 0))}) {
+      camera.eye = eye;
+      for (const double pixels : {0.5, 4.0})
+        check_level(m, clusters.extract(LevelRequest::for_camera(camera, pixels)).triangles);
+    }
+  }
 }
 
 }  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  seed();  // built once, before the first input (and written out if asked)
+  return 0;
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;

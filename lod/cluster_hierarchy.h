@@ -1,0 +1,84 @@
+// The cluster hierarchy: continuous LOD from edge collapses, drawn cluster by
+// cluster. Cignoni et al., *Batched Multi-Triangulation* (2005); Karis,
+// *Nanite: A Deep Dive* (2021).
+//
+// The full mesh is cut into clusters of about 128 triangles. Then, round after
+// round, neighbouring clusters are partitioned into groups (METIS, by shared
+// border), each group is simplified to about half by quadric edge collapse
+// with only the vertices it shares with other groups locked, and the result is
+// cut into new clusters that join the next round. Every border is thus
+// simplified one round up, and the scan's real open boundaries simplify along
+// themselves from the start.
+//
+// Each cluster carries two group errors: its own (of the group that made it;
+// 0 at full detail) and its parent's (of the group it was simplified in next;
+// none at the top). Errors never shrink going up and group bounds enclose the
+// bounds below, so the rule "draw c when own(c) <= t < parent(c)" decides each
+// cluster alone and the union is watertight, for one t everywhere or for a t
+// that is the error projected to the screen.
+#pragma once
+
+#include "core/types.h"
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace scan2lod {
+
+// A bounding sphere and the object-space error of the simplification that
+// made a group (Hausdorff-like: the largest quadric distance of its
+// collapses, never less than the groups below it).
+struct GroupBound {
+  float center[3];
+  float radius;
+  float error;
+};
+
+struct Cluster {
+  std::uint32_t first_triangle;  // into ClusterHierarchy::triangles
+  std::uint16_t triangle_count;
+  std::uint8_t level;            // DAG round: 0 at full detail
+  std::uint8_t reserved = 0;
+  std::int32_t own_group;        // the group that made it, -1 at full detail (error 0)
+  std::int32_t parent_group;     // the group it is simplified in next, -1 at the top
+};
+
+struct ClusterHierarchy {
+  std::vector<Cluster> clusters;      // level by level, full detail first
+  std::vector<Triangle> triangles;    // every cluster's, into the model's shared vertices
+  std::vector<GroupBound> groups;     // errors and bounds of the simplified groups
+  std::int64_t full_triangles = 0;    // triangles of the full-detail cut
+
+  std::size_t size() const { return clusters.size(); }
+  int levels() const;                 // DAG rounds, 1 for a hierarchy of one level
+};
+
+struct ClusterOptions {
+  int cluster_triangles = 128;   // most triangles per cluster
+  int group_clusters = 32;       // clusters per group, about (8 and 16 stall on the bunny: bench/lod)
+  double reduction = 0.5;        // a group is simplified to this share of its triangles
+  double stall = 0.85;           // a group that keeps more than this share did not simplify
+  // Weights of the attributes in the generalized quadrics (Garland and
+  // Heckbert, *Simplifying Surfaces with Color and Texture using Quadric Error
+  // Metrics*, 1998), against positions scaled to a unit diagonal: a unit
+  // normal turned by 90 degrees or a colour channel running its whole range
+  // costs what a move of `weight` diagonals does. 0 ignores the attribute.
+  float normal_weight = 0.002f;
+  float color_weight = 0.002f;
+  int threads = 0;               // 0: every core
+  // Called with the share of the triangles simplified so far (0 to 1); may be empty.
+  std::function<void(double)> progress;
+};
+
+// Builds the hierarchy over `triangles`, which index `positions` (and
+// `normals`, `colors` when those are not empty, one per position). The
+// triangles are taken as they are: they are the finest cut, in cluster order.
+// Vertices with equal positions are treated as one for adjacency and locking;
+// simplification only ever keeps existing vertices (half-edge collapse), so
+// the hierarchy adds none. Throws InputError when there are no triangles.
+ClusterHierarchy build_cluster_hierarchy(const std::vector<Vec3f>& positions, const std::vector<Vec3f>& normals,
+                                         const std::vector<Rgb>& colors, const std::vector<Triangle>& triangles,
+                                         const ClusterOptions& options = {});
+
+}  // namespace scan2lod

@@ -1,0 +1,415 @@
+#include "lod/group_simplify.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <queue>
+
+namespace scan2lod {
+namespace {
+
+constexpr int kMaxDim = 9;                   // position, normal, colour
+constexpr int kUpper = kMaxDim * (kMaxDim + 1) / 2;
+// Boundary constraint planes weigh this much per unit of squared edge length,
+// against the faces' area: a real boundary then moves along itself, not inwards.
+constexpr double kBoundaryWeight = 4.0;
+
+// x^T A x + 2 b^T x + c over the first `dim` coordinates, A symmetric (upper
+// triangle, row by row). Sums of squared distances to planes in R^dim.
+struct Quadric {
+  std::array<double, kUpper> a{};
+  std::array<double, kMaxDim> b{};
+  double c = 0;
+
+  void add(const Quadric& o) {
+    for (int i = 0; i < kUpper; ++i) a[std::size_t(i)] += o.a[std::size_t(i)];
+    for (int i = 0; i < kMaxDim; ++i) b[std::size_t(i)] += o.b[std::size_t(i)];
+    c += o.c;
+  }
+  double evaluate(const double* x, int dim) const {
+    double e = c;
+    int k = 0;
+    for (int i = 0; i < dim; ++i) {
+      double row = a[std::size_t(k++)] * x[i];
+      for (int j = i + 1; j < dim; ++j) row += 2 * a[std::size_t(k++)] * x[j];
+      e += x[i] * row + 2 * b[std::size_t(i)] * x[i];
+      k += kMaxDim - dim;  // skip the unused columns of this row
+    }
+    return e;
+  }
+  // Adds w * (I - sum e e^T) for the orthonormal `basis` of a plane through q.
+  void add_plane(const double* q, const double (*basis)[kMaxDim], int basis_size, int dim, double w) {
+    double qe[2] = {0, 0};
+    for (int s = 0; s < basis_size; ++s)
+      for (int i = 0; i < dim; ++i) qe[s] += q[i] * basis[s][i];
+    int k = 0;
+    for (int i = 0; i < dim; ++i) {
+      for (int j = i; j < dim; ++j) {
+        double v = i == j ? 1.0 : 0.0;
+        for (int s = 0; s < basis_size; ++s) v -= basis[s][i] * basis[s][j];
+        a[std::size_t(k++)] += w * v;
+      }
+      k += kMaxDim - dim;
+      double bi = -q[i];
+      for (int s = 0; s < basis_size; ++s) bi += qe[s] * basis[s][i];
+      b[std::size_t(i)] += w * bi;
+    }
+    double qq = 0;
+    for (int i = 0; i < dim; ++i) qq += q[i] * q[i];
+    for (int s = 0; s < basis_size; ++s) qq -= qe[s] * qe[s];
+    c += w * qq;
+  }
+};
+
+// Geometric plane quadric with the area it covers, for the reported error.
+struct PlaneQuadric {
+  Quadric q;  // positions only (dim 3)
+  double weight = 0;
+};
+
+struct GroupQuadrics {
+  int dim = 3;
+  std::vector<std::array<double, kMaxDim>> x;  // each vertex's point in R^dim
+  std::vector<Quadric> full;                   // position + attributes
+  std::vector<PlaneQuadric> plane;             // position only
+  double largest_error2 = 0;                   // over the collapses done
+};
+
+// Orthonormal basis of the plane through p0, p1, p2 in R^dim (Gram-Schmidt);
+// false for a degenerate triangle.
+bool triangle_basis(const double* p0, const double* p1, const double* p2, int dim, double (*e)[kMaxDim]) {
+  double n1 = 0, d = 0, n2 = 0;
+  for (int i = 0; i < dim; ++i) e[0][i] = p1[i] - p0[i], n1 += e[0][i] * e[0][i];
+  if (!(n1 > 1e-30)) return false;
+  n1 = std::sqrt(n1);
+  for (int i = 0; i < dim; ++i) e[0][i] /= n1;
+  for (int i = 0; i < dim; ++i) d += (p2[i] - p0[i]) * e[0][i];
+  for (int i = 0; i < dim; ++i) e[1][i] = p2[i] - p0[i] - d * e[0][i], n2 += e[1][i] * e[1][i];
+  if (!(n2 > 1e-30)) return false;
+  n2 = std::sqrt(n2);
+  for (int i = 0; i < dim; ++i) e[1][i] /= n2;
+  return true;
+}
+
+
+// The group in local indices, with each vertex's triangles.
+struct GroupTopology {
+  std::vector<std::array<int, 3>> tris;
+  std::vector<std::uint8_t> dead;           // per triangle
+  std::vector<std::vector<int>> incident;   // per vertex: its live triangles (and some dead ones)
+  std::vector<std::uint8_t> locked, border; // per vertex
+  std::vector<std::uint8_t> mark;           // scratch per vertex
+};
+
+int other_count(const GroupTopology& g, int t, int a, int b) {
+  const auto& x = g.tris[std::size_t(t)];
+  return (x[0] == a || x[1] == a || x[2] == a) && (x[0] == b || x[1] == b || x[2] == b);
+}
+
+// Phase: classify. An edge used once is on a border (the scan's real boundary,
+// since group borders are locked anyway); used more than twice, or a vertex
+// whose border is not one simple chain, is complex and stays where it is.
+void classify(GroupTopology* g) {
+  std::vector<std::pair<std::uint64_t, int>> edges;
+  for (std::size_t t = 0; t < g->tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t a = std::uint32_t(g->tris[t][std::size_t(k)]), b = std::uint32_t(g->tris[t][std::size_t((k + 1) % 3)]);
+      const bool forward = a < b;
+      if (!forward) std::swap(a, b);
+      edges.push_back({std::uint64_t(a) << 32 | b, forward ? 1 : -1});
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<int> border_edges(g->incident.size(), 0);
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    int orientation = 0;
+    while (j < edges.size() && edges[j].first == edges[i].first) orientation += edges[j].second, ++j;
+    const int a = int(edges[i].first >> 32), b = int(edges[i].first & 0xffffffffu);
+    if (j - i == 1) {
+      ++border_edges[std::size_t(a)], ++border_edges[std::size_t(b)];
+    } else if (j - i > 2 || orientation != 0) {
+      g->locked[std::size_t(a)] = g->locked[std::size_t(b)] = 1;  // non-manifold or flipped neighbours
+    }
+    i = j;
+  }
+  for (std::size_t v = 0; v < g->incident.size(); ++v) {
+    if (border_edges[v] > 2) g->locked[v] = 1;  // two border chains meet here
+    g->border[v] = border_edges[v] > 0;
+  }
+}
+
+struct Candidate {
+  float cost;
+  int from, to;
+  bool operator>(const Candidate& o) const { return cost > o.cost; }
+};
+
+// Phase: may `from` move onto `to`? Border vertices only slide along their
+// border; the edge's link must be its one or two opposite vertices (no fold
+// into a non-manifold); no triangle may turn over or collapse; and no new edge
+// may join two locked vertices, which a neighbouring group might join too.
+bool collapse_allowed(GroupTopology* g, int from, int to, const std::vector<std::array<double, kMaxDim>>& x) {
+  if (g->locked[std::size_t(from)]) return false;
+  int shared = 0;
+  for (int t : g->incident[std::size_t(from)])
+    if (!g->dead[std::size_t(t)] && other_count(*g, t, from, to)) ++shared;
+  if (shared == 0) return false;
+  if (g->border[std::size_t(from)] && !(g->border[std::size_t(to)] && shared == 1)) return false;
+
+  // Link condition: the vertices next to both are exactly the opposite ones.
+  for (int t : g->incident[std::size_t(to)])
+    if (!g->dead[std::size_t(t)])
+      for (int v : g->tris[std::size_t(t)]) g->mark[std::size_t(v)] = 1;
+  int common = 0;
+  bool locked_edge = false;
+  for (int t : g->incident[std::size_t(from)]) {
+    if (g->dead[std::size_t(t)]) continue;
+    for (int v : g->tris[std::size_t(t)]) {
+      if (v == from || v == to) continue;
+      if (g->mark[std::size_t(v)] == 1) g->mark[std::size_t(v)] = 2, ++common;
+      else if (g->mark[std::size_t(v)] == 0 && g->locked[std::size_t(v)] && g->locked[std::size_t(to)]) locked_edge = true;
+    }
+  }
+  for (int t : g->incident[std::size_t(to)])
+    if (!g->dead[std::size_t(t)])
+      for (int v : g->tris[std::size_t(t)]) g->mark[std::size_t(v)] = 0;
+  if (common != shared || locked_edge) return false;
+
+  // No triangle around `from` turns over or becomes a sliver.
+  const Eigen::Vector3d target(x[std::size_t(to)][0], x[std::size_t(to)][1], x[std::size_t(to)][2]);
+  for (int t : g->incident[std::size_t(from)]) {
+    if (g->dead[std::size_t(t)] || other_count(*g, t, from, to)) continue;
+    const auto& tri = g->tris[std::size_t(t)];
+    Eigen::Vector3d p[3], q[3];
+    for (int k = 0; k < 3; ++k) {
+      const auto& xv = x[std::size_t(tri[std::size_t(k)])];
+      p[k] = Eigen::Vector3d(xv[0], xv[1], xv[2]);
+      q[k] = tri[std::size_t(k)] == from ? target : p[k];
+    }
+    const Eigen::Vector3d before = (p[1] - p[0]).cross(p[2] - p[0]), after = (q[1] - q[0]).cross(q[2] - q[0]);
+    const double a = after.norm();
+    if (!(a > 0) || after.dot(before) < 0.2 * before.norm() * a) return false;
+  }
+  return true;
+}
+
+// Distance from p to the triangle abc (Ericson, *Real-Time Collision
+// Detection*, 2005, closest point by Voronoi regions).
+double point_triangle_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                               const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return ap.norm();
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return bp.norm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).norm();
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return cp.norm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
+  const double denom = 1 / (va + vb + vc);
+  return (p - (a + ab * (vb * denom) + ac * (vc * denom))).norm();
+}
+
+// Phase: the group's error, measured: how far each removed vertex lies from
+// the triangles around the vertex it went to (a one-sided Hausdorff distance
+// over the group's vertices, in scaled units).
+double removed_vertex_distance(GroupTopology& g, std::vector<int>& moved_to,
+                               const std::vector<std::array<double, kMaxDim>>& x) {
+  auto point = [&](int v) { return Eigen::Vector3d(x[std::size_t(v)][0], x[std::size_t(v)][1], x[std::size_t(v)][2]); };
+  double worst = 0;
+  for (std::size_t r = 0; r < moved_to.size(); ++r) {
+    if (moved_to[r] < 0) continue;
+    int rep = moved_to[r];
+    while (moved_to[std::size_t(rep)] >= 0) rep = moved_to[std::size_t(rep)];
+    moved_to[r] = rep;  // shortens the chain for the next ones
+    const Eigen::Vector3d p = point(int(r));
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int t : g.incident[std::size_t(rep)]) {
+      if (g.dead[std::size_t(t)]) continue;
+      const auto& tri = g.tris[std::size_t(t)];
+      nearest = std::min(nearest, point_triangle_distance(p, point(tri[0]), point(tri[1]), point(tri[2])));
+    }
+    if (std::isfinite(nearest)) worst = std::max(worst, nearest);
+  }
+  return worst;
+}
+
+// Per-thread scratch: global vertex -> group vertex, all -1 between groups.
+std::vector<int>& local_index(std::size_t vertices) {
+  thread_local std::vector<int> map;
+  if (map.size() < vertices) map.assign(vertices, -1);
+  return map;
+}
+
+}  // namespace
+
+SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size_t target,
+                               const SimplifyInput& in) {
+  const std::vector<Vec3f>& positions = *in.positions;
+  const bool use_normals = in.normal_weight > 0 && in.normals && !in.normals->empty();
+  const bool use_colors = in.color_weight > 0 && in.colors && !in.colors->empty();
+
+  // Phase: the group in local indices.
+  thread_local GroupTopology g;
+  g.tris.clear();
+  std::vector<int>& local = local_index(positions.size());
+  std::vector<std::int32_t> global;
+  for (const Triangle& t : triangles) {
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+    std::array<int, 3> l;
+    for (int k = 0; k < 3; ++k) {
+      int& i = local[std::size_t(t[std::size_t(k)])];
+      if (i < 0) i = int(global.size()), global.push_back(t[std::size_t(k)]);
+      l[std::size_t(k)] = i;
+    }
+    g.tris.push_back(l);
+  }
+  const std::size_t nv = global.size();
+  g.dead.assign(g.tris.size(), 0);
+  if (g.incident.size() < nv) g.incident.resize(nv);
+  for (std::size_t v = 0; v < nv; ++v) g.incident[v].clear();
+  for (std::size_t t = 0; t < g.tris.size(); ++t)
+    for (int v : g.tris[t]) g.incident[std::size_t(v)].push_back(int(t));
+  g.locked.assign(nv, 0);
+  g.border.assign(nv, 0);
+  g.mark.assign(nv, 0);
+  for (std::size_t v = 0; v < nv; ++v) g.locked[v] = (*in.locked)[std::size_t(global[v])];
+  classify(&g);
+
+  // Phase: quadrics.
+  GroupQuadrics q;
+  q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
+  q.x.resize(nv);
+  q.full.assign(nv, Quadric());
+  q.plane.assign(nv, PlaneQuadric());
+  for (std::size_t v = 0; v < nv; ++v) {
+    const std::size_t gv = std::size_t(global[v]);
+    double* x = q.x[v].data();
+    int d = 0;
+    for (int i = 0; i < 3; ++i) x[d++] = double(positions[gv][i]) * in.scale;
+    if (use_normals)
+      for (int i = 0; i < 3; ++i) x[d++] = double((*in.normals)[gv][i]) * in.normal_weight;
+    if (use_colors)
+      for (int i = 0; i < 3; ++i) x[d++] = double((*in.colors)[gv][std::size_t(i)]) / 255.0 * in.color_weight;
+  }
+  for (const auto& tri : g.tris) {
+    const double* p[3] = {q.x[std::size_t(tri[0])].data(), q.x[std::size_t(tri[1])].data(), q.x[std::size_t(tri[2])].data()};
+    const Eigen::Vector3d a(p[0][0], p[0][1], p[0][2]), b(p[1][0], p[1][1], p[1][2]), c(p[2][0], p[2][1], p[2][2]);
+    const Eigen::Vector3d normal = (b - a).cross(c - a);
+    const double area = 0.5 * normal.norm();
+    if (!(area > 0)) continue;
+    double basis[2][kMaxDim];
+    Quadric full, plane;
+    if (triangle_basis(p[0], p[1], p[2], q.dim, basis)) full.add_plane(p[0], basis, 2, q.dim, area);
+    if (triangle_basis(p[0], p[1], p[2], 3, basis)) plane.add_plane(p[0], basis, 2, 3, area);
+    for (int v : tri) {
+      q.full[std::size_t(v)].add(full);
+      q.plane[std::size_t(v)].q.add(plane);
+      q.plane[std::size_t(v)].weight += area;
+    }
+    // Border edges: a plane through the edge and the face normal, so that a
+    // border slides along itself rather than inwards.
+    for (int k = 0; k < 3; ++k) {
+      const int u = tri[std::size_t(k)], w = tri[std::size_t((k + 1) % 3)];
+      if (!g.border[std::size_t(u)] || !g.border[std::size_t(w)]) continue;
+      int uses = 0;
+      for (int t : g.incident[std::size_t(u)]) uses += other_count(g, t, u, w);
+      if (uses != 1) continue;
+      const Eigen::Vector3d pu(q.x[std::size_t(u)][0], q.x[std::size_t(u)][1], q.x[std::size_t(u)][2]);
+      const Eigen::Vector3d pw(q.x[std::size_t(w)][0], q.x[std::size_t(w)][1], q.x[std::size_t(w)][2]);
+      const Eigen::Vector3d edge = pw - pu;
+      if (!(edge.norm() > 0)) continue;
+      double cb[2][kMaxDim] = {};
+      const Eigen::Vector3d e0 = edge.normalized(), e1 = normal.normalized();
+      for (int i = 0; i < 3; ++i) cb[0][i] = e0[i], cb[1][i] = e1[i];
+      Quadric constraint;
+      constraint.add_plane(q.x[std::size_t(u)].data(), cb, 2, 3, kBoundaryWeight * edge.squaredNorm());
+      for (int v : {u, w}) q.full[std::size_t(v)].add(constraint), q.plane[std::size_t(v)].q.add(constraint);
+    }
+  }
+
+  // Phase: collapse the cheapest edge first, until the target.
+  auto cost = [&](int from, int to) {  // the quadrics' sum, evaluated as a sum: no copy
+    const double* x = q.x[std::size_t(to)].data();
+    return float(std::max(0.0, q.full[std::size_t(from)].evaluate(x, q.dim) + q.full[std::size_t(to)].evaluate(x, q.dim)));
+  };
+  std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> heap;
+  std::vector<std::uint8_t> removed(nv, 0);
+  std::vector<int> moved_to(nv, -1);  // where each removed vertex went
+  std::vector<int> around;
+  auto push_around = [&](int v) {  // both directions of each edge at v, once
+    around.clear();
+    for (int t : g.incident[std::size_t(v)]) {
+      if (g.dead[std::size_t(t)]) continue;
+      for (int w : g.tris[std::size_t(t)])
+        if (w != v && !g.mark[std::size_t(w)]) g.mark[std::size_t(w)] = 1, around.push_back(w);
+    }
+    for (int w : around) {
+      g.mark[std::size_t(w)] = 0;
+      if (!g.locked[std::size_t(v)]) heap.push({cost(v, w), v, w});
+      if (!g.locked[std::size_t(w)]) heap.push({cost(w, v), w, v});
+    }
+  };
+  // Initially each edge once per direction: from its smaller end.
+  for (std::size_t v = 0; v < nv; ++v) {
+    around.clear();
+    for (int t : g.incident[v])
+      for (int w : g.tris[std::size_t(t)])
+        if (w > int(v) && !g.mark[std::size_t(w)]) g.mark[std::size_t(w)] = 1, around.push_back(w);
+    for (int w : around) {
+      g.mark[std::size_t(w)] = 0;
+      if (!g.locked[v]) heap.push({cost(int(v), w), int(v), w});
+      if (!g.locked[std::size_t(w)]) heap.push({cost(w, int(v)), w, int(v)});
+    }
+  }
+  std::size_t live = g.tris.size();
+  while (live > target && !heap.empty()) {
+    const Candidate c = heap.top();
+    heap.pop();
+    if (removed[std::size_t(c.from)] || removed[std::size_t(c.to)]) continue;
+    // Stale entries: costs only grow as quadrics merge, so recompute and requeue.
+    const float now = cost(c.from, c.to);
+    if (now > c.cost * 1.0001f + 1e-30f) {
+      heap.push({now, c.from, c.to});
+      continue;
+    }
+    if (!collapse_allowed(&g, c.from, c.to, q.x)) continue;
+    // Apply: triangles on the edge die, the rest of from's move to `to`.
+    for (int t : g.incident[std::size_t(c.from)]) {
+      if (g.dead[std::size_t(t)]) continue;
+      if (other_count(g, t, c.from, c.to)) {
+        g.dead[std::size_t(t)] = 1;
+        --live;
+        continue;
+      }
+      for (int& v : g.tris[std::size_t(t)])
+        if (v == c.from) v = c.to;
+      g.incident[std::size_t(c.to)].push_back(t);
+    }
+    removed[std::size_t(c.from)] = 1;
+    moved_to[std::size_t(c.from)] = c.to;
+    q.full[std::size_t(c.to)].add(q.full[std::size_t(c.from)]);
+    auto& list = g.incident[std::size_t(c.to)];
+    list.erase(std::remove_if(list.begin(), list.end(), [&](int t) { return g.dead[std::size_t(t)] != 0; }),
+               list.end());
+    push_around(c.to);
+  }
+
+  SimplifiedGroup out;
+  for (std::size_t t = 0; t < g.tris.size(); ++t)
+    if (!g.dead[t])
+      out.triangles.push_back({global[std::size_t(g.tris[t][0])], global[std::size_t(g.tris[t][1])],
+                               global[std::size_t(g.tris[t][2])]});
+  out.error = float(removed_vertex_distance(g, moved_to, q.x) / in.scale);
+  for (std::int32_t v : global) local[std::size_t(v)] = -1;
+  return out;
+}
+
+}  // namespace scan2lod

@@ -1,0 +1,43 @@
+// One group of the cluster hierarchy simplified by quadric edge collapse, with
+// OpenMesh's Decimater doing the collapses (its half-edge collapse, link
+// conditions, vertex locks and normal-flip check) and a generalized quadric
+// module of ours choosing them (Garland and Heckbert, *Simplifying Surfaces
+// with Color and Texture using Quadric Error Metrics*, 1998; seed of the
+// out-of-core clustering of Lindstrom, *Out-of-Core Simplification of Large
+// Polygonal Models*, 2000): positions, normals and colours in one quadric, so
+// attributes survive at every level.
+#pragma once
+
+#include "core/types.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace scan2lod {
+
+// What the simplifier reads of the mesh: shared by every group.
+struct SimplifyInput {
+  const std::vector<Vec3f>* positions = nullptr;
+  const std::vector<Vec3f>* normals = nullptr;  // empty or one per position
+  const std::vector<Rgb>* colors = nullptr;     // empty or one per position
+  // locked[v] != 0: v is shared with another group and must not move.
+  const std::vector<std::uint8_t>* locked = nullptr;
+  float scale = 1;           // 1 / the mesh's diagonal: quadrics see a unit-sized mesh
+  float normal_weight = 0;   // see ClusterOptions
+  float color_weight = 0;
+};
+
+struct SimplifiedGroup {
+  std::vector<Triangle> triangles;  // into the same positions
+  // The largest collapse error: the square root of the geometric quadric's
+  // area-weighted mean squared distance at the kept vertex, in the mesh's units.
+  float error = 0;
+};
+
+// Simplifies `triangles` (welded: vertices at one position share one index)
+// towards `target` triangles. Triangles OpenMesh cannot hold as a manifold
+// (a third face on an edge) are kept as they are, their vertices locked.
+SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size_t target,
+                               const SimplifyInput& input);
+
+}  // namespace scan2lod

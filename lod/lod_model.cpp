@@ -1,0 +1,280 @@
+#include "lod/lod_model.h"
+
+#include "core/error.h"
+#include "lod/extract.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace scan2lod {
+
+const char* structure_name(LodStructure s) { return s == LodStructure::kOctree ? "octree" : "clusters"; }
+
+LodStructure default_structure(const LodModel& model) {
+  return model.clusters ? LodStructure::kClusters : LodStructure::kOctree;
+}
+
+void require_structure(const LodModel& model, LodStructure s, const std::string& source) {
+  if (!model.has(s))
+    throw InputError(source, std::string("the model has no ") + structure_name(s) + " structure (it holds " +
+                                 (model.octree && model.clusters ? "both"
+                                  : model.octree                 ? "only the octree"
+                                                                 : "only the cluster hierarchy") +
+                                 "); rebuild it with scan2lod build --structure " + structure_name(s) + " or both");
+}
+
+LodModel model_from_octree(McOctree tree, LodArray lod) {
+  LodModel model;
+  model.vertices.positions = std::move(tree.positions);
+  model.vertices.normals = std::move(tree.normals);
+  model.vertices.colors = std::move(tree.colors);
+  tree.positions.clear();
+  tree.normals.clear();
+  tree.colors.clear();
+  model.octree = OctreeLod{std::move(tree), std::move(lod)};
+  return model;
+}
+
+void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool shares_vertices,
+                           const ClusterOptions& options) {
+  VertexArray& v = model->vertices;
+  std::size_t first = 0;
+  if (!shares_vertices) {
+    first = v.size();
+    // An attribute present on one side only is filled on the other, so that
+    // the arrays stay one per position.
+    const bool normals = !v.normals.empty() || !mesh.normals.empty();
+    const bool colors = !v.colors.empty() || !mesh.colors.empty();
+    v.positions.insert(v.positions.end(), mesh.positions.begin(), mesh.positions.end());
+    if (normals) {
+      v.normals.resize(first, Vec3f::Zero());
+      if (mesh.normals.empty()) v.normals.resize(v.size(), Vec3f::Zero());
+      else v.normals.insert(v.normals.end(), mesh.normals.begin(), mesh.normals.end());
+    }
+    if (colors) {
+      v.colors.resize(first, Rgb{200, 200, 200});
+      if (mesh.colors.empty()) v.colors.resize(v.size(), Rgb{200, 200, 200});
+      else v.colors.insert(v.colors.end(), mesh.colors.begin(), mesh.colors.end());
+    }
+  }
+  std::vector<Triangle> triangles = mesh.triangles;
+  for (Triangle& t : triangles)
+    for (std::int32_t& i : t) i += std::int32_t(first);
+  model->clusters = build_cluster_hierarchy(v.positions, v.normals, v.colors, triangles, options);
+  model->cluster_vertex_first = first;
+  model->cluster_vertex_count = mesh.positions.size();
+}
+
+LevelRequest LevelRequest::at_percent(double p) {
+  LevelRequest r;
+  r.kind = Kind::kPercent;
+  r.percent = p;
+  return r;
+}
+LevelRequest LevelRequest::at_triangles(std::int64_t t) {
+  LevelRequest r;
+  r.kind = Kind::kTriangles;
+  r.triangles = t;
+  return r;
+}
+LevelRequest LevelRequest::at_error(double e) {
+  LevelRequest r;
+  r.kind = Kind::kError;
+  r.error = e;
+  return r;
+}
+LevelRequest LevelRequest::for_camera(const CameraView& c, double pixel_error) {
+  LevelRequest r;
+  r.kind = Kind::kCamera;
+  r.camera = c;
+  r.pixel_error = pixel_error;
+  return r;
+}
+LevelRequest LevelRequest::at_priority(std::size_t p) {
+  LevelRequest r;
+  r.kind = Kind::kPriority;
+  r.priority = p;
+  return r;
+}
+
+LevelExtractor::LevelExtractor(const LodModel& model, LodStructure structure) : model_(&model), structure_(structure) {
+  require_structure(model, structure, "");
+  if (structure == LodStructure::kClusters) table_ = cluster_cut_table(*model.clusters);
+}
+
+std::int64_t LevelExtractor::full_triangles() const {
+  return structure_ == LodStructure::kClusters ? model_->clusters->full_triangles
+                                               : model_->octree->lod.accumulated.back();
+}
+
+std::int64_t LevelExtractor::coarsest_triangles() const {
+  if (structure_ == LodStructure::kClusters) return table_.triangles.back();
+  const LodArray& lod = model_->octree->lod;
+  return lod.accumulated[priority_for_percent(lod, 0)];
+}
+
+int LevelExtractor::levels() const {
+  return structure_ == LodStructure::kClusters ? model_->clusters->levels() : model_->octree->tree.depth + 1;
+}
+
+std::vector<std::uint8_t> LevelExtractor::triangle_levels() const {
+  std::vector<std::uint8_t> out;
+  out.reserve(cut_.triangles.size());
+  if (structure_ == LodStructure::kClusters) {
+    for (std::int32_t c : selected_) {
+      const Cluster& cl = model_->clusters->clusters[std::size_t(c)];
+      out.insert(out.end(), cl.triangle_count, cl.level);
+    }
+  } else {
+    out.assign(cut_.triangles.size(), 0);
+  }
+  return out;
+}
+
+const LevelCut& LevelExtractor::extract(const LevelRequest& request) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  cut_.structure = structure_;
+  cut_.triangles.clear();
+  cut_.clusters = 0;
+  cut_.priority = 0;
+  cut_.error = 0;
+  using Kind = LevelRequest::Kind;
+  if (structure_ == LodStructure::kOctree) {
+    const OctreeLod& o = *model_->octree;
+    std::size_t p = 0;
+    switch (request.kind) {
+      case Kind::kPercent: p = priority_for_percent(o.lod, request.percent); break;
+      case Kind::kTriangles: p = priority_for_triangles(o.lod, request.triangles); break;
+      case Kind::kPriority:
+        if (request.priority > o.lod.full())
+          throw InputError("", "priority " + std::to_string(request.priority) + " is past the octree's " +
+                                   std::to_string(o.lod.full()) + " expansions");
+        p = request.priority;
+        break;
+      case Kind::kError:
+      case Kind::kCamera:
+        throw InputError("", "the octree offers levels by percent, triangles or priority, not by error or camera; "
+                             "use --structure clusters");
+    }
+    cut_.select_seconds = std::chrono::duration<double>(clock::now() - start).count();
+    extract_lod(o.tree, o.lod, p, &expanded_, &cut_.triangles);
+    cut_.priority = p;
+    cut_.percent = o.lod.full() ? 100.0 * double(p) / double(o.lod.full()) : 100.0;
+  } else {
+    const ClusterHierarchy& h = *model_->clusters;
+    switch (request.kind) {
+      case Kind::kPercent: {
+        const double share = std::clamp(request.percent, 0.0, 100.0) / 100.0;
+        cut_.error = error_for_triangles(table_, std::int64_t(std::floor(share * double(h.full_triangles))));
+        select_clusters_by_error(h, float(cut_.error), &selected_);
+        break;
+      }
+      case Kind::kTriangles:
+        cut_.error = error_for_triangles(table_, request.triangles);
+        select_clusters_by_error(h, float(cut_.error), &selected_);
+        break;
+      case Kind::kError:
+        cut_.error = request.error;
+        select_clusters_by_error(h, float(request.error), &selected_);
+        break;
+      case Kind::kCamera:
+        select_clusters_for_view(h, request.camera, float(request.pixel_error), &projected_, &selected_);
+        break;
+      case Kind::kPriority:
+        throw InputError("", "the cluster hierarchy has no priority numbers; ask by percent, triangles, error or "
+                             "camera, or use --structure octree");
+    }
+    cut_.select_seconds = std::chrono::duration<double>(clock::now() - start).count();
+    emit_clusters(h, selected_, &cut_.triangles);
+    cut_.clusters = selected_.size();
+    cut_.percent = h.full_triangles ? 100.0 * double(cut_.triangles.size()) / double(h.full_triangles) : 100.0;
+  }
+  cut_.extract_seconds = std::chrono::duration<double>(clock::now() - start).count();
+  return cut_;
+}
+
+TriangleMesh compact_level(const LodModel& model, const std::vector<Triangle>& triangles) {
+  const VertexArray& v = model.vertices;
+  TriangleMesh mesh;
+  std::vector<std::int32_t> remap(v.size(), -1);
+  mesh.triangles.reserve(triangles.size());
+  for (const Triangle& t : triangles) {
+    Triangle out;
+    for (int k = 0; k < 3; ++k) {
+      std::int32_t& r = remap[std::size_t(t[std::size_t(k)])];
+      if (r < 0) {
+        r = std::int32_t(mesh.positions.size());
+        mesh.positions.push_back(v.positions[std::size_t(t[std::size_t(k)])]);
+        if (!v.normals.empty()) mesh.normals.push_back(v.normals[std::size_t(t[std::size_t(k)])]);
+        if (!v.colors.empty()) mesh.colors.push_back(v.colors[std::size_t(t[std::size_t(k)])]);
+      }
+      out[std::size_t(k)] = r;
+    }
+    mesh.triangles.push_back(out);
+  }
+  return mesh;
+}
+
+Aabb model_bounds(const LodModel& model) { return bounds(model.vertices.positions); }
+
+OctreeSummary describe_octree(const LodModel& model) {
+  require_structure(model, LodStructure::kOctree, "");
+  const McOctree& t = model.octree->tree;
+  const LodArray& lod = model.octree->lod;
+  OctreeSummary s;
+  s.resolution = t.grid.resolution;
+  s.depth = t.depth;
+  s.cube_size = t.grid.cube_size;
+  s.origin = t.grid.origin;
+  s.nodes = t.size();
+  s.nodes_per_level.assign(std::size_t(t.depth) + 1, 0);
+  for (std::size_t n = 0; n < t.size(); ++n) {
+    ++s.nodes_per_level[t.levels[n]];
+    s.leaves += t.is_leaf(n);
+  }
+  s.expansions = lod.full();
+  s.pinned = lod.pinned;
+  s.pinned_triangles = lod.accumulated[lod.pinned];
+  s.full_triangles = lod.accumulated.back();
+  return s;
+}
+
+ClusterSummary describe_clusters(const LodModel& model) {
+  require_structure(model, LodStructure::kClusters, "");
+  const ClusterHierarchy& h = *model.clusters;
+  ClusterSummary s;
+  s.clusters = h.size();
+  s.groups = h.groups.size();
+  s.stored_triangles = h.triangles.size();
+  s.levels = h.levels();
+  s.full_triangles = h.full_triangles;
+  s.coarsest_triangles = LevelExtractor(model, LodStructure::kClusters).coarsest_triangles();
+  return s;
+}
+
+std::vector<LevelSummary> summarize_levels(const LodModel& model, LodStructure structure,
+                                           const std::vector<double>& percents) {
+  LevelExtractor extractor(model, structure);
+  std::vector<LevelSummary> out;
+  std::vector<std::uint8_t> used(model.vertices.size(), 0);
+  for (double percent : percents) {
+    const LevelCut& cut = extractor.extract(LevelRequest::at_percent(percent));
+    LevelSummary s;
+    s.percent = percent;
+    s.priority = cut.priority;
+    s.error = cut.error;
+    s.clusters = cut.clusters;
+    s.triangles = cut.triangles.size();
+    for (const Triangle& t : cut.triangles)
+      for (std::int32_t v : t)
+        if (!used[std::size_t(v)]) used[std::size_t(v)] = 1, ++s.vertices;
+    for (const Triangle& t : cut.triangles)
+      for (std::int32_t v : t) used[std::size_t(v)] = 0;
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace scan2lod

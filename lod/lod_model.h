@@ -1,0 +1,173 @@
+// The LOD face: one model, one shared vertex array, one or more LOD
+// structures, and levels asked for by percent, triangle budget, object-space
+// error or camera. Every caller (the command line, the viewer, the benchmarks)
+// goes through this header; none reads a structure's arrays.
+//
+// Structures:
+// - the prioritized marching-cube octree (Lee, *Efficient LOD Model
+//   Generation of 3D Objects using Prioritized Marching Cube Octree*, 2007):
+//   lod/mc_octree.h, lod/lod_array.h, lod/extract.h;
+// - the cluster hierarchy (Cignoni et al., *Batched Multi-Triangulation*,
+//   2005): lod/cluster_hierarchy.h, lod/cluster_cut.h.
+// A level of either is an index buffer into the model's vertices.
+#pragma once
+
+#include "core/types.h"
+#include "lod/cluster_cut.h"
+#include "lod/cluster_hierarchy.h"
+#include "lod/lod_array.h"
+#include "lod/mc_octree.h"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace scan2lod {
+
+enum class LodStructure { kOctree, kClusters };
+
+// "octree" or "clusters", as the command line spells them.
+const char* structure_name(LodStructure s);
+
+// Positions, normals and colours every level of every structure indexes.
+struct VertexArray {
+  std::vector<Vec3f> positions;
+  std::vector<Vec3f> normals;  // empty or one per position
+  std::vector<Rgb> colors;     // empty or one per position
+  std::size_t size() const { return positions.size(); }
+};
+
+// The octree with its priority numbering. Its vertices live in the model's
+// VertexArray (tree.positions, normals and colors are left empty there).
+struct OctreeLod {
+  McOctree tree;
+  LodArray lod;
+};
+
+struct LodModel {
+  VertexArray vertices;
+  std::optional<OctreeLod> octree;
+  std::optional<ClusterHierarchy> clusters;
+  // What the cluster hierarchy indexes: vertices [first, first + count).
+  std::size_t cluster_vertex_first = 0, cluster_vertex_count = 0;
+
+  bool has(LodStructure s) const { return s == LodStructure::kOctree ? octree.has_value() : clusters.has_value(); }
+};
+
+// The structure used when none is named: the cluster hierarchy when the model
+// has one (it is the more faithful), else the octree.
+LodStructure default_structure(const LodModel& model);
+
+// Throws InputError (naming `source`) unless the model holds `s`.
+void require_structure(const LodModel& model, LodStructure s, const std::string& source);
+
+// Takes ownership of an octree built by build_mc_octree and number_nodes; its
+// vertex arrays become the model's shared vertices.
+LodModel model_from_octree(McOctree tree, LodArray lod);
+
+// Adds a cluster hierarchy built over `mesh`'s triangles. When `mesh` indexes
+// the model's vertices already (`shares_vertices`: a reconstruction whose mesh
+// is the octree's first vertices), nothing is copied; otherwise its vertices
+// are appended. Without vertices yet, the mesh's become the model's.
+void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool shares_vertices,
+                           const ClusterOptions& options = {});
+
+// What a level is asked for by. Exactly one of them.
+struct LevelRequest {
+  enum class Kind { kPercent, kTriangles, kError, kCamera, kPriority };
+  Kind kind = Kind::kPercent;
+  double percent = 100;          // octree: of the LOD array; clusters: of the full triangle count
+  std::int64_t triangles = 0;    // the finest level with at most this many
+  double error = 0;              // object-space error, in the model's units (clusters only)
+  CameraView camera;             // with pixel_error (clusters only)
+  double pixel_error = 1;
+  std::size_t priority = 0;      // expansions of the LOD array (octree only)
+
+  static LevelRequest at_percent(double p);
+  static LevelRequest at_triangles(std::int64_t t);
+  static LevelRequest at_error(double e);
+  static LevelRequest for_camera(const CameraView& c, double pixel_error);
+  static LevelRequest at_priority(std::size_t p);
+};
+
+// One level: an index buffer into the model's vertices, and how it was chosen.
+struct LevelCut {
+  LodStructure structure = LodStructure::kClusters;
+  std::vector<Triangle> triangles;
+  std::size_t clusters = 0;      // clusters drawn (cluster hierarchy)
+  std::size_t priority = 0;      // expansions (octree)
+  double error = 0;              // the uniform threshold (cluster hierarchy; camera: 0)
+  double percent = 100;          // of the structure's full detail (triangles for clusters)
+  double select_seconds = 0;     // choosing the cut
+  double extract_seconds = 0;    // choosing and writing the index buffer
+};
+
+// Takes levels from one structure of one model, keeping scratch space and the
+// cut tables between calls (a slider or a moving camera asks many times).
+class LevelExtractor {
+ public:
+  // Throws InputError if the model lacks `structure`.
+  LevelExtractor(const LodModel& model, LodStructure structure);
+  // Throws InputError for a request the structure does not offer (an error or
+  // camera for the octree, a priority for the clusters, a priority past the
+  // LOD array's end).
+  const LevelCut& extract(const LevelRequest& request);
+  const LodModel& model() const { return *model_; }
+  LodStructure structure() const { return structure_; }
+  // Triangles at full detail.
+  std::int64_t full_triangles() const;
+  // Triangles of the coarsest level offered.
+  std::int64_t coarsest_triangles() const;
+  // Per triangle of the last cut, its cluster's DAG level (clusters; 0 at full
+  // detail), or 0 for the octree: what views colour by.
+  std::vector<std::uint8_t> triangle_levels() const;
+  // Levels a view may colour: the octree's depth + 1 or the DAG's rounds.
+  int levels() const;
+
+ private:
+  const LodModel* model_;
+  LodStructure structure_;
+  LevelCut cut_;
+  std::vector<std::uint8_t> expanded_;          // octree scratch
+  ClusterCutTable table_;                       // clusters
+  std::vector<float> projected_;
+  std::vector<std::int32_t> selected_;
+};
+
+// A self-contained mesh of one level's triangles: only the vertices they use.
+TriangleMesh compact_level(const LodModel& model, const std::vector<Triangle>& triangles);
+
+// The box around every vertex any level can use.
+Aabb model_bounds(const LodModel& model);
+
+// What each structure holds, for `info` and summaries.
+struct OctreeSummary {
+  int resolution = 0, depth = 0;
+  double cube_size = 0;
+  Vec3d origin = Vec3d::Zero();
+  std::size_t nodes = 0, leaves = 0, expansions = 0, pinned = 0;
+  std::int64_t pinned_triangles = 0, full_triangles = 0;
+  std::vector<std::size_t> nodes_per_level;
+};
+struct ClusterSummary {
+  std::size_t clusters = 0, groups = 0, stored_triangles = 0;
+  int levels = 0;
+  std::int64_t full_triangles = 0, coarsest_triangles = 0;
+};
+// Throw InputError unless the model holds that structure.
+OctreeSummary describe_octree(const LodModel& model);
+ClusterSummary describe_clusters(const LodModel& model);
+
+// A model's levels at the given percentages, for tables and plots: triangles
+// and distinct vertices of each.
+struct LevelSummary {
+  double percent = 0;
+  std::size_t priority = 0;    // octree
+  double error = 0;            // clusters
+  std::size_t triangles = 0, vertices = 0, clusters = 0;
+};
+std::vector<LevelSummary> summarize_levels(const LodModel& model, LodStructure structure,
+                                           const std::vector<double>& percents);
+
+}  // namespace scan2lod

@@ -1,0 +1,206 @@
+// The cluster hierarchy's claims (Cignoni et al., Batched Multi-Triangulation,
+// 2005): the finest cut is the input mesh, every uniform cut is as sound as
+// the full mesh, every view-dependent cut is watertight where the full mesh
+// is, and the generalized quadrics keep colours. Real scans (the bundled
+// bunny) and shapes with known answers (a scanned sphere).
+#include "acquisition/load_inputs.h"
+#include "lod/lod_model.h"
+#include "measure/surface_distance.h"
+#include "measure/topology.h"
+#include "reconstruct/marching_cubes.h"
+#include "test_shapes.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <open3d/geometry/KDTreeFlann.h>
+#include <open3d/geometry/TriangleMesh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace scan2lod {
+namespace {
+
+struct Built {
+  TriangleMesh mesh;
+  LodModel model;
+};
+
+const Built& bunny128() {
+  static const Built b = [] {
+    ReconstructOptions options;
+    options.resolution = 128;
+    Built out;
+    out.mesh = reconstruct(load_oriented_points({testing::bunny_scans()}), options).mesh;
+    add_cluster_hierarchy(&out.model, out.mesh, false);
+    return out;
+  }();
+  return b;
+}
+
+TriangleMesh level_mesh(const LodModel& model, const std::vector<Triangle>& tris) {
+  TriangleMesh m;
+  m.positions = model.vertices.positions;
+  m.triangles = tris;
+  return m;
+}
+
+std::vector<Triangle> sorted_rotated(std::vector<Triangle> tris) {
+  for (Triangle& t : tris) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  std::sort(tris.begin(), tris.end());
+  return tris;
+}
+
+TEST(ClusterHierarchy, FinestCutIsTheInputMesh) {
+  const Built& b = bunny128();
+  LevelExtractor extractor(b.model, LodStructure::kClusters);
+  const LevelCut& cut = extractor.extract(LevelRequest::at_error(0));
+  EXPECT_EQ(sorted_rotated(cut.triangles), sorted_rotated(b.mesh.triangles));
+  const LevelCut& all = extractor.extract(LevelRequest::at_percent(100));
+  EXPECT_EQ(all.triangles.size(), b.mesh.triangles.size());
+  // The shared vertices are the mesh's own, unmoved.
+  ASSERT_EQ(b.model.vertices.size(), b.mesh.positions.size());
+  EXPECT_TRUE(std::equal(b.mesh.positions.begin(), b.mesh.positions.end(), b.model.vertices.positions.begin()));
+}
+
+TEST(ClusterHierarchy, GoesDownToAFewHundredTrianglesAndStoresAboutTwiceTheMesh) {
+  const Built& b = bunny128();
+  LevelExtractor extractor(b.model, LodStructure::kClusters);
+  EXPECT_LE(extractor.coarsest_triangles(), 256);
+  EXPECT_LE(double(b.model.clusters->triangles.size()), 2.2 * double(b.mesh.triangles.size()));
+}
+
+TEST(ClusterHierarchy, EveryUniformCutIsAsSoundAsTheFullMesh) {
+  const Built& b = bunny128();
+  const MeshTopology full = mesh_topology(b.mesh);
+  LevelExtractor extractor(b.model, LodStructure::kClusters);
+  const ClusterCutTable table = cluster_cut_table(*b.model.clusters);
+  int checked = 0;
+  for (std::size_t i = 0; i < table.errors.size(); ++i) {
+    if (table.triangles[i] < 1000) continue;
+    const LevelCut& cut = extractor.extract(LevelRequest::at_error(table.errors[i]));
+    ASSERT_EQ(std::int64_t(cut.triangles.size()), table.triangles[i]) << "the table counts what the cut emits";
+    const MeshTopology t = mesh_topology(level_mesh(b.model, cut.triangles));
+    EXPECT_EQ(t.non_manifold_edges, 0u) << cut.triangles.size() << " triangles";
+    EXPECT_LE(t.boundary_loops, full.boundary_loops) << cut.triangles.size() << " triangles";
+    EXPECT_LE(t.components, full.components) << cut.triangles.size() << " triangles";
+    ++checked;
+  }
+  EXPECT_GT(checked, 10);
+}
+
+TEST(ClusterHierarchy, BudgetsGiveTheFinestCutThatFits) {
+  const Built& b = bunny128();
+  LevelExtractor extractor(b.model, LodStructure::kClusters);
+  std::size_t last = 0;
+  for (std::int64_t budget : {500, 1000, 2000, 5000, 10000, 20000, 50000}) {
+    const LevelCut& cut = extractor.extract(LevelRequest::at_triangles(budget));
+    EXPECT_LE(std::int64_t(cut.triangles.size()), std::max<std::int64_t>(budget, extractor.coarsest_triangles()));
+    EXPECT_GE(cut.triangles.size(), last) << "larger budgets never get fewer triangles";
+    last = cut.triangles.size();
+  }
+}
+
+TEST(ClusterHierarchy, ViewCutsAreWatertightFromAnyCamera) {
+  const Built& b = bunny128();
+  const MeshTopology full = mesh_topology(b.mesh);
+  const Aabb box = model_bounds(b.model);
+  const Vec3f centre = 0.5f * (box.min + box.max);
+  const float size = box.diagonal();
+  LevelExtractor extractor(b.model, LodStructure::kClusters);
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> unit(-1.f, 1.f);
+  std::size_t smallest = SIZE_MAX, largest = 0;
+  for (int view = 0; view < 50; ++view) {
+    CameraView camera;
+    // Half outside the box at 0.6 to 3 diagonals, half inside it.
+    const Vec3f direction = Vec3f(unit(random), unit(random), unit(random)).normalized();
+    const Vec3f inside = Vec3f(unit(random), unit(random), unit(random)).cwiseProduct(box.extent());
+    camera.eye = view % 2 ? Vec3f(centre + direction * size * (0.6f + 1.2f * (unit(random) + 1)))
+                          : Vec3f(centre + 0.5f * inside);
+    camera.target = centre;
+    camera.height = 720;
+    for (double pixels : {0.5, 1.0, 2.0, 4.0, 8.0}) {
+      const LevelCut& cut = extractor.extract(LevelRequest::for_camera(camera, pixels));
+      const MeshTopology t = mesh_topology(level_mesh(b.model, cut.triangles));
+      ASSERT_EQ(t.non_manifold_edges, 0u) << "view " << view << " at " << pixels << " px";
+      ASSERT_LE(t.boundary_loops, full.boundary_loops) << "view " << view << " at " << pixels << " px";
+      ASSERT_LE(t.components, full.components) << "view " << view << " at " << pixels << " px";
+      smallest = std::min(smallest, cut.triangles.size());
+      largest = std::max(largest, cut.triangles.size());
+    }
+  }
+  // The cameras did ask for different cuts.
+  EXPECT_LT(double(smallest), 0.5 * double(largest));
+}
+
+// A sphere of radius 1 with three colour bands, scanned, reconstructed and
+// simplified with and without colours in the quadrics.
+Rgb band_colour(const Vec3f& p) {
+  if (p.z() > 0.35f) return {230, 40, 40};
+  if (p.z() < -0.35f) return {40, 40, 230};
+  return {40, 200, 40};
+}
+
+const TriangleMesh& banded_sphere() {
+  static const TriangleMesh mesh = [] {
+    TriangleMesh sphere = testing::from_open3d(*open3d::geometry::TriangleMesh::CreateSphere(1.0, 120));
+    for (const Vec3f& p : sphere.positions) sphere.colors.push_back(band_colour(p));
+    ReconstructOptions options;
+    options.resolution = 64;
+    return reconstruct(testing::scan_shape(sphere), options).mesh;
+  }();
+  return mesh;
+}
+
+// Mean colour distance from each full-mesh vertex to the nearest vertex the cut uses.
+double colour_error(const LodModel& model, const std::vector<Triangle>& tris, const TriangleMesh& full) {
+  std::vector<std::uint8_t> used(model.vertices.size(), 0);
+  std::vector<std::int32_t> ids;
+  for (const Triangle& t : tris)
+    for (std::int32_t v : t)
+      if (!used[std::size_t(v)]) used[std::size_t(v)] = 1, ids.push_back(v);
+  Eigen::MatrixXd points(3, Eigen::Index(ids.size()));
+  for (std::size_t i = 0; i < ids.size(); ++i)
+    points.col(Eigen::Index(i)) = model.vertices.positions[std::size_t(ids[i])].cast<double>();
+  open3d::geometry::KDTreeFlann tree(points);
+  double sum = 0;
+  std::vector<int> nearest(1);
+  std::vector<double> d2(1);
+  for (std::size_t v = 0; v < full.positions.size(); ++v) {
+    tree.SearchKNN(Eigen::Vector3d(full.positions[v].cast<double>()), 1, nearest, d2);
+    const Rgb& a = full.colors[v];
+    const Rgb& b = model.vertices.colors[std::size_t(ids[std::size_t(nearest[0])])];
+    sum += std::sqrt(double((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                            (a[2] - b[2]) * (a[2] - b[2])));
+  }
+  return sum / double(full.positions.size());
+}
+
+TEST(ClusterHierarchy, ColoursInTheQuadricsKeepColourBands) {
+  const TriangleMesh& full = banded_sphere();
+  ASSERT_EQ(full.colors.size(), full.positions.size());
+  LodModel with, without;
+  add_cluster_hierarchy(&with, full, false);
+  ClusterOptions blind;
+  blind.color_weight = 0;
+  add_cluster_hierarchy(&without, full, false, blind);
+  // The figure is at 5 k triangles; this sphere is smaller, so the
+  // same share of it.
+  const std::int64_t budget = std::int64_t(full.triangles.size()) / 8;
+  LevelExtractor a(with, LodStructure::kClusters), b(without, LodStructure::kClusters);
+  const LevelCut cut_with = a.extract(LevelRequest::at_triangles(budget));
+  const LevelCut cut_without = b.extract(LevelRequest::at_triangles(budget));
+  const double e_with = colour_error(with, cut_with.triangles, full);
+  const double e_without = colour_error(without, cut_without.triangles, full);
+  EXPECT_LT(e_with, e_without) << cut_with.triangles.size() << " vs " << cut_without.triangles.size() << " triangles";
+  // And the surface is still the unit sphere.
+  const TriangleMesh m = compact_level(with, cut_with.triangles);
+  double worst = 0;
+  for (const Vec3f& p : m.positions) worst = std::max(worst, std::abs(double(p.norm()) - 1.0));
+  EXPECT_LT(worst, 0.02);
+}
+
+}  // namespace
+}  // namespace scan2lod
