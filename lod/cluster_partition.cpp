@@ -132,43 +132,4 @@ std::vector<std::int32_t> partition_graph(const WeightedGraph& graph, int part_s
   return part;
 }
 
-std::vector<std::int32_t> partition_triangles(const Triangle* triangles, std::size_t count,
-                                              const std::vector<std::int32_t>& weld, int part_size, int* parts) {
-  // Edges by welded ends, sorted so that the triangles on one edge lie together.
-  std::vector<std::pair<std::uint64_t, std::int32_t>> edges;
-  edges.reserve(3 * count);
-  for (std::size_t t = 0; t < count; ++t)
-    for (int k = 0; k < 3; ++k) {
-      std::uint32_t a = std::uint32_t(weld[std::size_t(triangles[t][k])]);
-      std::uint32_t b = std::uint32_t(weld[std::size_t(triangles[t][(k + 1) % 3])]);
-      if (a == b) continue;
-      if (a > b) std::swap(a, b);
-      edges.push_back({std::uint64_t(a) << 32 | b, std::int32_t(t)});
-    }
-  std::sort(edges.begin(), edges.end());
-
-  std::vector<std::int32_t> degree(count + 1, 0);
-  std::vector<std::pair<std::int32_t, std::int32_t>> links;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
-    for (std::size_t a = i; a < j; ++a)
-      for (std::size_t b = a + 1; b < j; ++b)
-        if (edges[a].second != edges[b].second) links.push_back({edges[a].second, edges[b].second});
-    i = j;
-  }
-  WeightedGraph graph;
-  for (const auto& l : links) ++degree[std::size_t(l.first)], ++degree[std::size_t(l.second)];
-  graph.first.assign(count + 1, 0);
-  for (std::size_t t = 0; t < count; ++t) graph.first[t + 1] = graph.first[t] + degree[t];
-  graph.adjacency.resize(std::size_t(graph.first[count]));
-  graph.weights.assign(graph.adjacency.size(), 1);
-  std::vector<std::int32_t> fill(graph.first.begin(), graph.first.end() - 1);
-  for (const auto& l : links) {
-    graph.adjacency[std::size_t(fill[std::size_t(l.first)]++)] = l.second;
-    graph.adjacency[std::size_t(fill[std::size_t(l.second)]++)] = l.first;
-  }
-  return partition_graph(graph, part_size, parts);
-}
-
 }  // namespace scan2lod

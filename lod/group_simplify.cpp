@@ -62,18 +62,10 @@ struct Quadric {
   }
 };
 
-// Geometric plane quadric with the area it covers, for the reported error.
-struct PlaneQuadric {
-  Quadric q;  // positions only (dim 3)
-  double weight = 0;
-};
-
 struct GroupQuadrics {
   int dim = 3;
   std::vector<std::array<double, kMaxDim>> x;  // each vertex's point in R^dim
   std::vector<Quadric> full;                   // position + attributes
-  std::vector<PlaneQuadric> plane;             // position only
-  double largest_error2 = 0;                   // over the collapses done
 };
 
 // Orthonormal basis of the plane through p0, p1, p2 in R^dim (Gram-Schmidt);
@@ -284,11 +276,10 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
   classify(&g);
 
   // Phase: quadrics.
-  GroupQuadrics q;
+  thread_local GroupQuadrics q;  // reused: a group's quadrics are about a megabyte
   q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
   q.x.resize(nv);
   q.full.assign(nv, Quadric());
-  q.plane.assign(nv, PlaneQuadric());
   for (std::size_t v = 0; v < nv; ++v) {
     const std::size_t gv = std::size_t(global[v]);
     double* x = q.x[v].data();
@@ -306,13 +297,10 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
     const double area = 0.5 * normal.norm();
     if (!(area > 0)) continue;
     double basis[2][kMaxDim];
-    Quadric full, plane;
+    Quadric full;
     if (triangle_basis(p[0], p[1], p[2], q.dim, basis)) full.add_plane(p[0], basis, 2, q.dim, area);
-    if (triangle_basis(p[0], p[1], p[2], 3, basis)) plane.add_plane(p[0], basis, 2, 3, area);
     for (int v : tri) {
       q.full[std::size_t(v)].add(full);
-      q.plane[std::size_t(v)].q.add(plane);
-      q.plane[std::size_t(v)].weight += area;
     }
     // Border edges: a plane through the edge and the face normal, so that a
     // border slides along itself rather than inwards.
@@ -331,7 +319,7 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
       for (int i = 0; i < 3; ++i) cb[0][i] = e0[i], cb[1][i] = e1[i];
       Quadric constraint;
       constraint.add_plane(q.x[std::size_t(u)].data(), cb, 2, 3, kBoundaryWeight * edge.squaredNorm());
-      for (int v : {u, w}) q.full[std::size_t(v)].add(constraint), q.plane[std::size_t(v)].q.add(constraint);
+      for (int v : {u, w}) q.full[std::size_t(v)].add(constraint);
     }
   }
 

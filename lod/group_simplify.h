@@ -1,11 +1,12 @@
-// One group of the cluster hierarchy simplified by quadric edge collapse, with
-// OpenMesh's Decimater doing the collapses (its half-edge collapse, link
-// conditions, vertex locks and normal-flip check) and a generalized quadric
-// module of ours choosing them (Garland and Heckbert, *Simplifying Surfaces
-// with Color and Texture using Quadric Error Metrics*, 1998; seed of the
-// out-of-core clustering of Lindstrom, *Out-of-Core Simplification of Large
-// Polygonal Models*, 2000): positions, normals and colours in one quadric, so
-// attributes survive at every level.
+// One group of the cluster hierarchy simplified by half-edge collapse under
+// generalized quadrics (Garland and Heckbert, *Simplifying Surfaces with Color
+// and Texture using Quadric Error Metrics*, 1998): positions, normals and
+// colours in one quadric, so attributes survive at every level. Vertices the
+// group shares with others are locked; the scan's real boundaries slide along
+// themselves under boundary constraint planes.
+//
+// Our own collapse loop, not OpenMesh's Decimater: see the measurement in
+// lod/README.md ("Why not OpenMesh's Decimater").
 #pragma once
 
 #include "core/types.h"
@@ -29,8 +30,8 @@ struct SimplifyInput {
 
 struct SimplifiedGroup {
   std::vector<Triangle> triangles;  // into the same positions
-  // The largest collapse error: the square root of the geometric quadric's
-  // area-weighted mean squared distance at the kept vertex, in the mesh's units.
+  // Measured, in the mesh's units: the largest distance from a removed vertex
+  // to the triangles around the vertex it went to.
   float error = 0;
 };
 
