@@ -107,7 +107,7 @@ void add_build_command(CLI::App& app) {
                   "pieces and holes %.3f s, attributes %.3f s\n",
                   s.seconds_index, s.seconds_distances, s.seconds_emit, s.seconds_cleanup, s.seconds_attributes);
     }
-    std::printf("%zu points, %zu vertices", r.stats.points, model.vertices.size());
+    std::printf("%zu points, %zu vertices", points.size(), model.vertices.size());
     if (model.has(LodStructure::kOctree)) {
       const OctreeSummary o = describe_octree(model);
       std::printf(", octree: %zu nodes, %zu expansions, %lld triangles at 100%%", o.nodes, o.expansions,

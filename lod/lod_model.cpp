@@ -66,34 +66,34 @@ void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool share
   model->cluster_vertex_count = mesh.positions.size();
 }
 
-LevelRequest LevelRequest::at_percent(double p) {
+static LevelRequest request_of(LevelRequest::Kind kind) {
   LevelRequest r;
-  r.kind = Kind::kPercent;
+  r.kind = kind;
+  return r;
+}
+LevelRequest LevelRequest::at_percent(double p) {
+  LevelRequest r = request_of(Kind::kPercent);
   r.percent = p;
   return r;
 }
 LevelRequest LevelRequest::at_triangles(std::int64_t t) {
-  LevelRequest r;
-  r.kind = Kind::kTriangles;
+  LevelRequest r = request_of(Kind::kTriangles);
   r.triangles = t;
   return r;
 }
 LevelRequest LevelRequest::at_error(double e) {
-  LevelRequest r;
-  r.kind = Kind::kError;
+  LevelRequest r = request_of(Kind::kError);
   r.error = e;
   return r;
 }
 LevelRequest LevelRequest::for_camera(const CameraView& c, double pixel_error) {
-  LevelRequest r;
-  r.kind = Kind::kCamera;
+  LevelRequest r = request_of(Kind::kCamera);
   r.camera = c;
   r.pixel_error = pixel_error;
   return r;
 }
 LevelRequest LevelRequest::at_priority(std::size_t p) {
-  LevelRequest r;
-  r.kind = Kind::kPriority;
+  LevelRequest r = request_of(Kind::kPriority);
   r.priority = p;
   return r;
 }

@@ -1192,6 +1192,20 @@ std::string make_report(const Settings& s, const RunInfo& info, const std::vecto
   return r.text();
 }
 
+// Each peer's output that ran: its topology and distance to the full mesh.
+void measure_peers(std::vector<PeerCase>* peers, const TriangleMesh& full, const CompareOptions& compare) {
+  for (PeerCase& c : *peers) {
+    if (c.runs.empty() || c.runs[0].status != Outcome::ok) continue;
+    try {
+      const TriangleMesh mesh = undump_mesh(c.mesh_path);
+      c.topology = mesh_topology(mesh);
+      c.fidelity = compare_surfaces(mesh, full, compare);
+    } catch (const std::exception& e) {
+      c.measure_error = e.what();
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -1494,16 +1508,7 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
       l.measure_error = e.what();
     }
-    for (PeerCase& c : l.peers) {
-      if (c.runs.empty() || c.runs[0].status != Outcome::ok) continue;
-      try {
-        const TriangleMesh mesh = undump_mesh(c.mesh_path);
-        c.topology = mesh_topology(mesh);
-        c.fidelity = compare_surfaces(mesh, full, compare);
-      } catch (const std::exception& e) {
-        c.measure_error = e.what();
-      }
-    }
+    measure_peers(&l.peers, full, compare);
   }
   for (ClusterLevel& l : cluster_levels) {
     if (l.budget == 0) continue;  // the full detail: error 0
@@ -1514,16 +1519,7 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
       l.measure_error = e.what();
     }
-    for (PeerCase& c : l.peers) {
-      if (c.runs.empty() || c.runs[0].status != Outcome::ok) continue;
-      try {
-        const TriangleMesh mesh = undump_mesh(c.mesh_path);
-        c.topology = mesh_topology(mesh);
-        c.fidelity = compare_surfaces(mesh, full, compare);
-      } catch (const std::exception& e) {
-        c.measure_error = e.what();
-      }
-    }
+    measure_peers(&l.peers, full, compare);
   }
   info.total_seconds = seconds_since(benchmark_start);
 
