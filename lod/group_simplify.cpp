@@ -168,6 +168,24 @@ bool collapse_allowed(GroupTopology* g, int from, int to, const std::vector<std:
       for (int v : g->tris[std::size_t(t)]) g->mark[std::size_t(v)] = 0;
   if (common != shared || locked_edge) return false;
 
+  // Each triangle the collapse removes keeps its third vertex tied to the
+  // kept one through another triangle. Where it is the only tie (a triangle
+  // hanging on the border by one corner) the collapse would cut a piece off:
+  // on scans with open boundaries that left pieces of 1-3 triangles.
+  for (int t : g->incident[std::size_t(from)]) {
+    if (g->dead[std::size_t(t)] || !other_count(*g, t, from, to)) continue;
+    for (int w : g->tris[std::size_t(t)]) {
+      if (w == from || w == to) continue;
+      bool tied = false;
+      for (int u : g->incident[std::size_t(w)]) {
+        if (g->dead[std::size_t(u)] || other_count(*g, u, from, to)) continue;
+        const auto& x = g->tris[std::size_t(u)];
+        tied |= x[0] == from || x[1] == from || x[2] == from || x[0] == to || x[1] == to || x[2] == to;
+      }
+      if (!tied) return false;
+    }
+  }
+
   // No triangle around `from` turns over or becomes a sliver.
   const Eigen::Vector3d target(x[std::size_t(to)][0], x[std::size_t(to)][1], x[std::size_t(to)][2]);
   for (int t : g->incident[std::size_t(from)]) {

@@ -3,9 +3,12 @@
 //
 // One case per run: the points of a case (virtual scans of an Open3D shape or
 // of a mesh, real range scans, or a mesh's own vertices) are built into a
-// model as `scan2lod build` does (bench/model_build.h), and the levels at 1,
-// 5, 10, 20, 30, ..., 100 % (priority_for_percent, the viewer's slider) are
-// extracted and measured. A case passes when, at every level:
+// model with both structures as `scan2lod build` does (bench/model_build.h),
+// and each structure is checked on its own.
+//
+// The octree: the levels at 1, 5, 10, 20, 30, ..., 100 % (priority_for_percent,
+// the viewer's slider) are extracted and measured. It passes when, at every
+// level:
 //   loops     boundary loops <= the full mesh's (a new loop is a crack)
 //   nm        0 non-manifold edges
 //   degen     0 degenerate triangles
@@ -20,8 +23,22 @@
 // vertices (pinches: more than one fan of triangles) and whether a level has
 // the full mesh's topology are reported as information only.
 //
-// Output: one line per level, then a tab-separated `RESULT key=value ...`
-// line. `--table FILE` turns the RESULT lines collected in FILE into the
+// The cluster hierarchy ("sound", and "crack-free from any view"): every
+// uniform cut of cluster_cut_table with at least 1000 triangles (every cut of
+// a mesh under 10 000) at its error, and the cut of each of 50 cameras (half
+// outside the box, half inside) at 0.5, 1, 2, 4 and 8 pixels, are measured as
+// index buffers into the model's vertices. It passes when:
+//   cl_loops  every judged uniform cut: boundary loops <= the full mesh's
+//   cl_nm     ... 0 non-manifold edges
+//   cl_comps  ... components <= the full mesh's
+//   cl_count  ... the table's triangle count == the extracted count
+//   cl_view   every view cut: the same three topology rules
+// The full mesh is the full-detail cut. The coarsest cut (flagged above 256
+// triangles), the storage ratio, the hierarchy's build time and the coarser
+// cuts that would fail are reported as information.
+//
+// Output: one line per octree level, uniform cut and pixel error, then a
+// tab-separated `RESULT key=value ...` line. `--table FILE` turns the RESULT lines collected in FILE into the
 // markdown report instead; bench/lod/sweep.sh runs every case and does that.
 //
 //   build/bin/scan2lod_bench_sweep --name NAME --resolution R
@@ -209,20 +226,31 @@ struct Expectation {
   long euler = 0;
 };
 
-enum Rule { kLoops, kNonManifold, kDegenerate, kAccumulation, kMonotone, kClosed, kRuleCount };
-constexpr std::array<const char*, kRuleCount> kRuleKeys = {"loops", "nm", "degen", "accum", "monotone", "closed"};
+// The octree's rules, then the cluster hierarchy's (from kClusterLoops on):
+// each structure passes or fails on its own rules.
+enum Rule {
+  kLoops, kNonManifold, kDegenerate, kAccumulation, kMonotone, kClosed,
+  kClusterLoops, kClusterNonManifold, kClusterComponents, kClusterCount, kClusterView,
+  kRuleCount
+};
+constexpr Rule kFirstClusterRule = kClusterLoops;
+constexpr std::array<const char*, kRuleCount> kRuleKeys = {
+    "loops", "nm", "degen", "accum", "monotone", "closed", "cl_loops", "cl_nm", "cl_comps", "cl_count", "cl_view"};
 
-// Where each rule first failed and what was seen there; the first to fail overall.
+// Where each rule first failed and what was seen there; per structure, the
+// first of its rules to fail.
 struct Verdict {
   std::array<std::string, kRuleCount> failure;  // "" while the rule holds
-  std::string first;
+  std::string first, cluster_first;
 
   void fail(Rule rule, const std::string& where_and_what) {
     if (!failure[rule].empty()) return;
     failure[rule] = where_and_what;
-    if (first.empty()) first = kRuleKeys[rule];
+    std::string& f = rule >= kFirstClusterRule ? cluster_first : first;
+    if (f.empty()) f = kRuleKeys[rule];
   }
   bool pass() const { return first.empty(); }
+  bool cluster_pass() const { return cluster_first.empty(); }
 };
 
 template <typename F>
@@ -239,12 +267,193 @@ std::size_t largest(const std::vector<Level>& levels, F value) {
   return most;
 }
 
+// ---------------------------------------------------------------------------
+// The cluster hierarchy: its uniform cuts, and cuts seen from cameras, are
+// checked as the octree's levels are ("sound" and "crack-free from any view").
+
+// Uniform cuts of at least kJudgedCutTriangles triangles are judged, every cut
+// when the full mesh has fewer than kSmallMesh; the coarser cuts of larger
+// meshes are measured and counted, not judged.
+constexpr std::int64_t kJudgedCutTriangles = 1000;
+constexpr std::int64_t kSmallMesh = 10000;
+// A coarsest cut larger than this is flagged (information): simplification stalled.
+constexpr std::int64_t kCoarsestFlag = 256;
+constexpr int kCameras = 50;
+constexpr std::array<double, 5> kPixelErrors = {0.5, 1, 2, 4, 8};
+constexpr int kViewHeight = 720;
+
+// `n` cameras: the first half outside the box, looking at its centre from
+// directions spread over the sphere (a Fibonacci lattice) at 0.6 to 3
+// diagonals from it (spread by the golden ratio, so that distance and
+// direction do not go together); the second half at random points inside the
+// box (fixed seed), looking at the centre. Selection depends only on the
+// eye's distance to each group, so where a camera looks matters to a viewer
+// only.
+std::vector<CameraView> sweep_cameras(const Aabb& box, int n) {
+  const Vec3f center = 0.5f * (box.min + box.max);
+  const float diagonal = std::max(box.diagonal(), 1e-6f);
+  const float golden = float(M_PI) * (3.0f - std::sqrt(5.0f));
+  const int outside = n / 2;
+  std::vector<CameraView> cameras;
+  const auto look = [&](const Vec3f& eye, const Vec3f& target) {
+    CameraView c;
+    c.eye = eye;
+    c.target = target;
+    c.up = std::abs((target - eye).normalized().y()) > 0.99f ? Vec3f(1, 0, 0) : Vec3f(0, 1, 0);
+    c.height = kViewHeight;
+    cameras.push_back(c);
+  };
+  for (int i = 0; i < outside; ++i) {
+    const float y = 1.0f - 2.0f * (float(i) + 0.5f) / float(outside), r = std::sqrt(std::max(0.0f, 1.0f - y * y));
+    const Vec3f direction(r * std::cos(golden * float(i)), y, r * std::sin(golden * float(i)));
+    const double spread = std::fmod((i + 0.5) * 0.6180339887498949, 1.0);
+    look(center + float(0.6 + 2.4 * spread) * diagonal * direction, center);
+  }
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> unit(0, 1);
+  for (int i = outside; i < n; ++i) {
+    Vec3f eye;
+    for (int k = 0; k < 3; ++k) eye[k] = box.min[k] + unit(rng) * box.extent()[k];
+    look(eye, (eye - center).norm() > 1e-3f * diagonal ? center : Vec3f(eye + Vec3f(1, 0, 0)));
+  }
+  return cameras;
+}
+
+// What the cluster checks measured, beyond the verdict.
+struct ClusterResult {
+  MeshTopology full;                          // the full-detail cut (the table's first entry)
+  bool full_same_as_octree = false;           // that cut has the octree's 100 % triangles, loops, comps and χ
+  std::size_t cuts = 0, judged = 0;           // uniform cuts in the table; those judged
+  std::size_t unjudged_bad = 0;               // coarse cuts not judged that would fail a rule
+  std::int64_t smallest_judged = 0;           // triangles of the coarsest judged cut
+  std::int64_t coarsest = 0;                  // triangles of the coarsest cut
+  double storage = 0;                         // stored triangles / full
+  int levels = 0;
+  std::size_t clusters = 0, groups = 0;
+  std::size_t max_loops = 0, max_comps = 0, max_nm = 0, max_degen = 0;  // over the judged uniform cuts
+  std::size_t views = 0, view_max_loops = 0, view_max_comps = 0, view_max_nm = 0;
+  std::size_t view_min_triangles = 0, view_max_triangles = 0;
+  double view_median_triangles = 0;
+  double check_seconds = 0;
+};
+
+// Checks every judged uniform cut of the hierarchy (cl_loops, cl_nm,
+// cl_comps: as the octree's loops and nm, and no more components than the
+// full mesh; cl_count: the cut has the table's count) and the cut of every
+// camera at every pixel error (cl_view: the same three topology rules). Cuts
+// are measured as index buffers into the model's vertices, as they are drawn.
+ClusterResult check_clusters(const LodModel& model, const MeshTopology& octree_full, Verdict* verdict) {
+  const auto start = Clock::now();
+  const ClusterHierarchy& h = *model.clusters;
+  const ClusterCutTable table = cluster_cut_table(h);
+  LevelExtractor extractor(model, LodStructure::kClusters);
+  TriangleMesh mesh;
+  mesh.positions = model.vertices.positions;
+  const auto measure = [&](const LevelCut& cut) {
+    mesh.triangles = cut.triangles;
+    return mesh_topology(mesh);
+  };
+
+  ClusterResult c;
+  c.cuts = table.errors.size();
+  c.coarsest = table.triangles.back();
+  c.storage = h.full_triangles ? double(h.triangles.size()) / double(h.full_triangles) : 0;
+  c.levels = h.levels();
+  c.clusters = h.size();
+  c.groups = h.groups.size();
+  c.full = measure(extractor.extract(LevelRequest::at_error(table.errors.front())));
+  const MeshTopology& full = c.full;
+  c.full_same_as_octree = full.triangles == octree_full.triangles && full.boundary_loops == octree_full.boundary_loops &&
+                          full.components == octree_full.components &&
+                          full.euler_characteristic == octree_full.euler_characteristic;
+  c.smallest_judged = h.full_triangles;
+
+  const bool small = h.full_triangles < kSmallMesh;
+  for (std::size_t i = 0; i < table.errors.size(); ++i) {
+    const LevelCut& cut = extractor.extract(LevelRequest::at_error(table.errors[i]));
+    const MeshTopology t = measure(cut);
+    const bool judged = small || table.triangles[i] >= kJudgedCutTriangles;
+    std::printf("cut %zu error=%.6g tris=%zu table=%lld clusters=%zu loops=%zu bedges=%zu nm=%zu degen=%zu comps=%zu "
+                "euler=%ld%s\n",
+                i, double(table.errors[i]), t.triangles, (long long)table.triangles[i], cut.clusters, t.boundary_loops,
+                t.boundary_edges, t.non_manifold_edges, t.degenerate_triangles, t.components, t.euler_characteristic,
+                judged ? "" : " (not judged)");
+    const bool bad = t.boundary_loops > full.boundary_loops || t.non_manifold_edges > 0 ||
+                     t.components > full.components || std::int64_t(t.triangles) != table.triangles[i];
+    if (!judged) {
+      c.unjudged_bad += bad;
+      continue;
+    }
+    ++c.judged;
+    c.smallest_judged = std::min(c.smallest_judged, table.triangles[i]);
+    c.max_loops = std::max(c.max_loops, t.boundary_loops);
+    c.max_comps = std::max(c.max_comps, t.components);
+    c.max_nm = std::max(c.max_nm, t.non_manifold_edges);
+    c.max_degen = std::max(c.max_degen, t.degenerate_triangles);
+    // The table's short form is what comes before " (".
+    const std::string at = format("%lld-triangle cut (cut %zu, error %.3g): ", (long long)table.triangles[i], i,
+                                  double(table.errors[i]));
+    if (t.boundary_loops > full.boundary_loops)
+      verdict->fail(kClusterLoops,
+                    at + format("%zu boundary loops, the full mesh %zu", t.boundary_loops, full.boundary_loops));
+    if (t.non_manifold_edges > 0)
+      verdict->fail(kClusterNonManifold, at + format("%zu non-manifold edges", t.non_manifold_edges));
+    if (t.components > full.components)
+      verdict->fail(kClusterComponents, at + format("%zu components, the full mesh %zu", t.components, full.components));
+    if (std::int64_t(t.triangles) != table.triangles[i])
+      verdict->fail(kClusterCount, at + format("extracted %zu, the table %lld", t.triangles, (long long)table.triangles[i]));
+  }
+
+  const Aabb box = model_bounds(model);
+  const Vec3f center = 0.5f * (box.min + box.max);
+  const std::vector<CameraView> cameras = sweep_cameras(box, kCameras);
+  std::vector<double> triangles;
+  for (const double pixel_error : kPixelErrors) {
+    std::size_t fewest = SIZE_MAX, most = 0, loops = 0, comps = 0, nm = 0;
+    for (std::size_t k = 0; k < cameras.size(); ++k) {
+      const LevelCut& cut = extractor.extract(LevelRequest::for_camera(cameras[k], pixel_error));
+      const MeshTopology t = measure(cut);
+      triangles.push_back(double(t.triangles));
+      fewest = std::min(fewest, t.triangles);
+      most = std::max(most, t.triangles);
+      loops = std::max(loops, t.boundary_loops);
+      comps = std::max(comps, t.components);
+      nm = std::max(nm, t.non_manifold_edges);
+      std::string problem;
+      if (t.boundary_loops > full.boundary_loops)
+        problem += format(", %zu boundary loops (the full mesh %zu)", t.boundary_loops, full.boundary_loops);
+      if (t.non_manifold_edges > 0) problem += format(", %zu non-manifold edges", t.non_manifold_edges);
+      if (t.components > full.components)
+        problem += format(", %zu components (the full mesh %zu)", t.components, full.components);
+      if (problem.empty()) continue;
+      const std::string where = format("%g px, camera %zu (%s, %.2f diagonals from the centre; %zu triangles)",
+                                       pixel_error, k, k < cameras.size() / 2 ? "outside" : "inside",
+                                       (cameras[k].eye - center).norm() / std::max(box.diagonal(), 1e-6f),
+                                       t.triangles);
+      std::printf("view FAIL %s%s\n", where.c_str(), problem.c_str());
+      verdict->fail(kClusterView, where + ":" + problem.substr(1));
+    }
+    std::printf("views at %g px: %zu cameras, tris %zu-%zu, max loops=%zu comps=%zu nm=%zu\n", pixel_error,
+                cameras.size(), fewest, most, loops, comps, nm);
+    c.view_max_loops = std::max(c.view_max_loops, loops);
+    c.view_max_comps = std::max(c.view_max_comps, comps);
+    c.view_max_nm = std::max(c.view_max_nm, nm);
+  }
+  c.views = triangles.size();
+  c.view_min_triangles = std::size_t(*std::min_element(triangles.begin(), triangles.end()));
+  c.view_max_triangles = std::size_t(*std::max_element(triangles.begin(), triangles.end()));
+  c.view_median_triangles = median(triangles);
+  c.check_seconds = seconds_since(start);
+  return c;
+}
+
 int run_case(const std::string& name, int resolution, const OrientedPoints& points, double load_seconds,
              const std::optional<Expectation>& expect) {
-  const auto start = Clock::now();
-  // The octree alone: this sweep checks its levels and accumulation table.
-  const LodModel model = build_model_timed(points, resolution, /*clusters=*/false).model;
-  const double build_seconds = load_seconds + seconds_since(start);
+  // Both structures, as `scan2lod build` makes them; the cluster hierarchy's
+  // build is timed on its own.
+  const TimedModel timed = build_model_timed(points, resolution, /*clusters=*/true);
+  const LodModel& model = timed.model;
+  const double build_seconds = load_seconds + timed.reconstruct_seconds + timed.octree_model_seconds();
   const LodArray& lod = model.octree->lod;
   LevelExtractor extractor(model, LodStructure::kOctree);
 
@@ -314,8 +523,12 @@ int run_case(const std::string& name, int resolution, const OrientedPoints& poin
                                          (long long)lod.accumulated[priority], extracted));
   }
 
+  const ClusterResult cl = check_clusters(model, full, &verdict);
+
   std::printf("RESULT\tname=%s\tR=%d\tpass=%d\tfirst_fail=%s", name.c_str(), resolution, int(verdict.pass()),
               verdict.pass() ? "-" : verdict.first.c_str());
+  std::printf("\tcl_pass=%d\tcl_first_fail=%s", int(verdict.cluster_pass()),
+              verdict.cluster_pass() ? "-" : verdict.cluster_first.c_str());
   for (int r = 0; r < kRuleCount; ++r)
     if (!verdict.failure[r].empty()) std::printf("\tfail.%s=%s", kRuleKeys[r], verdict.failure[r].c_str());
   std::printf("\texpect=%s\tsame_topology=%d", expect ? format("%zu/%ld", expect->components, expect->euler).c_str() : "–",
@@ -330,8 +543,22 @@ int run_case(const std::string& name, int resolution, const OrientedPoints& poin
               largest(levels, [](const Level& l) { return l.topology.degenerate_triangles; }),
               largest(levels, [](const Level& l) { return l.folded; }),
               largest(levels, [](const Level& l) { return l.singular; }));
-  std::printf("\tnodes=%zu\toffered=%zu\tsampled=%zu\tbuild_s=%.1f\n", model.octree->tree.size(), offered.size(),
+  std::printf("\tnodes=%zu\toffered=%zu\tsampled=%zu\tbuild_s=%.1f", model.octree->tree.size(), offered.size(),
               sampled.size(), build_seconds);
+  std::printf("\tcl_full=%zu/%zu/%zu/%ld\tcl_full_same=%d", cl.full.triangles, cl.full.boundary_loops,
+              cl.full.components, cl.full.euler_characteristic, int(cl.full_same_as_octree));
+  std::printf("\tcl_cuts=%zu/%zu\tcl_unjudged_bad=%zu\tcl_smallest_judged=%lld", cl.judged, cl.cuts,
+              cl.unjudged_bad, (long long)cl.smallest_judged);
+  std::printf("\tcl_max_loops=%zu\tcl_max_comps=%zu\tcl_max_nm=%zu\tcl_max_degen=%zu", cl.max_loops, cl.max_comps,
+              cl.max_nm, cl.max_degen);
+  std::printf("\tcl_views=%zu\tcl_view_tris=%zu/%.0f/%zu\tcl_view_max_loops=%zu\tcl_view_max_comps=%zu"
+              "\tcl_view_max_nm=%zu",
+              cl.views, cl.view_min_triangles, cl.view_median_triangles, cl.view_max_triangles, cl.view_max_loops,
+              cl.view_max_comps, cl.view_max_nm);
+  std::printf("\tcl_coarsest=%lld\tcl_coarsest_flag=%d\tcl_storage=%.2f\tcl_levels=%d\tcl_clusters=%zu"
+              "\tcl_groups=%zu\tcl_build_s=%.1f\tcl_check_s=%.1f\n",
+              (long long)cl.coarsest, int(cl.coarsest > kCoarsestFlag), cl.storage, cl.levels, cl.clusters, cl.groups,
+              timed.cluster_seconds, cl.check_seconds);
   return 0;
 }
 
@@ -390,11 +617,47 @@ void sort_cases(std::vector<Result>* results) {
                    [&](const Result& a, const Result& b) { return rank(a) < rank(b); });
 }
 
+// One structure's failed rules (kRuleKeys[from, to)), the first to fail (the
+// RESULT key `first_key` names it) first, each with the short form of where:
+// "closed @ 1 %, degen @ 60 %".
+std::string failed_rules(const Result& r, const std::string& first_key, int from, int to) {
+  std::vector<std::string> rules = {get(r, first_key)};
+  for (int i = from; i < to; ++i)
+    if (kRuleKeys[i] != rules.front()) rules.push_back(kRuleKeys[i]);
+  std::string failed;
+  for (const std::string& rule : rules) {
+    const std::string f = get(r, "fail." + rule);
+    if (f.empty()) continue;
+    if (!failed.empty()) failed += ", ";
+    failed += rule + " @ " + f.substr(0, f.find(" ("));
+  }
+  return failed.empty() ? "–" : failed;
+}
+
+// One structure's failures in full: "*first* at where. Also *other* at where".
+std::string failures_in_full(const Result& r, const std::string& first_key, int from, int to) {
+  const std::string first = get(r, first_key);
+  std::string out = "*" + first + "* at " + get(r, "fail." + first);
+  std::string others;
+  for (int i = from; i < to; ++i) {
+    const std::string rule = kRuleKeys[i];
+    if (rule != first && !get(r, "fail." + rule).empty())
+      others += (others.empty() ? "" : "; ") + ("*" + rule + "* at " + get(r, "fail." + rule));
+  }
+  return others.empty() ? out : out + ". Also " + others;
+}
+
+std::string outcome(const std::string& pass) { return pass == "1" ? "pass" : pass == "0" ? "**FAIL**" : "–"; }
+
 int print_table(const std::string& path, const std::string& command, const std::string& load_at_start) {
   std::vector<Result> results = read_results(path);
   sort_cases(&results);
-  std::size_t passed = 0;
-  for (const Result& r : results) passed += get(r, "pass") == "1";
+  std::size_t passed = 0, cluster_passed = 0, both = 0;
+  for (const Result& r : results) {
+    passed += get(r, "pass") == "1";
+    cluster_passed += get(r, "cl_pass") == "1";
+    both += get(r, "pass") == "1" && get(r, "cl_pass") == "1";
+  }
 
   std::printf("# LOD robustness sweep: crack-freeness beyond the bunny\n\n");
   std::printf("%s  \n", run_header_line(load_at_start, load_average()).c_str());
@@ -403,71 +666,107 @@ int print_table(const std::string& path, const std::string& command, const std::
   const std::string revision = source_revision();
   if (!revision.empty()) std::printf("Source: %s (at run time)  \n", revision.c_str());
   std::printf("Tool: `scan2lod_bench_sweep` (bench/lod/shape_sweep.cpp), one process per case\n\n");
-  std::printf("**%zu of %zu cases pass.**\n\n", passed, results.size());
+  std::printf("**Octree: %zu of %zu cases pass. Cluster hierarchy: %zu of %zu cases pass.** Both: %zu.\n\n", passed,
+              results.size(), cluster_passed, results.size(), both);
 
   std::printf(
-      "Each case is built as `scan2lod build` builds it, at resolution R, and its levels at 1, 5, 10, 20, 30, "
-      "…, 100 %% (`priority_for_percent`, the viewer's slider) are measured. A case passes when at every level: "
+      "Each case is built as `scan2lod build` builds it, at resolution R, with both structures.\n\n"
+      "**Octree.** Its levels at 1, 5, 10, 20, 30, "
+      "…, 100 %% (`priority_for_percent`, the viewer's slider) are measured. It passes when at every level: "
       "boundary loops ≤ the full mesh's (*loops*; a new loop is a crack), 0 non-manifold edges (*nm*), 0 "
       "degenerate triangles (*degen*), the accumulation table's count = the extracted count, also at 60 sampled "
       "priorities, offered or not (*accum*), and counts never fall over the levels and the offered priorities "
       "(*monotone*). Shapes with a known answer (the *expected* column: components / χ) must also have 0 boundary "
       "edges and that topology at every level (*closed*).\n\n");
   std::printf(
+      "**Cluster hierarchy.** Every uniform cut of `cluster_cut_table` with at least %lld triangles (every cut when "
+      "the full mesh has fewer than %lld) is extracted at its error (`LevelRequest::at_error`), and so is the cut of "
+      "each of %d cameras at %s pixels of error (`LevelRequest::for_camera`, %d pixels high, 45°): half outside the "
+      "box at 0.6 to 3 diagonals from its centre, looking at it, half at random points inside the box. Cuts are "
+      "measured as drawn, as index buffers into the model's vertices. The hierarchy passes when every judged "
+      "uniform cut has boundary loops ≤ the full mesh's (*cl_loops*), 0 non-manifold edges (*cl_nm*), components "
+      "≤ the full mesh's (*cl_comps*) and the table's triangle count (*cl_count*), and every view cut the same "
+      "three topology rules (*cl_view*). The full mesh is the full-detail cut. Coarser uniform cuts are measured "
+      "and the ones that would fail are counted (*coarse failing*, information), as are degenerate triangles; a "
+      "coarsest cut above %lld triangles is marked **bold** (simplification stalled). *Storage*: triangles "
+      "stored / full.\n\n",
+      (long long)kJudgedCutTriangles, (long long)kSmallMesh, kCameras,
+      "0.5, 1, 2, 4 and 8", kViewHeight, (long long)kCoarsestFlag);
+  std::printf(
       "Shapes are Open3D's, scanned by the virtual scanner from 14 views at 256² (*virtual P*: the bunny mesh at "
       "P²); `bun_sub2` and `bun_sub3` are bun000 + bun045 and bun000 + bun090 + bun180 of `bun.conf`. Per-level "
       "lists run over the 12 levels and are shown once when all equal. *Same topology*: every level has the full "
       "mesh's components and (closed full meshes) χ, information only, as are folded edges (interior edges whose "
-      "triangles face opposite ways) and singular vertices (pinches). *s*: scanning + model build.\n\n");
+      "triangles face opposite ways) and singular vertices (pinches). *s*: scanning + octree build.\n\n");
 
-  std::printf("| case | R | result | failed rules (first level) | expected | full: triangles / loops / comps / χ | "
-              "triangles at 1 %% | loops | components | χ | same topology | max nm | max degen | max folded | "
-              "max singular | s |\n");
-  std::printf("|---|--:|---|---|---|---|--:|---|---|---|---|--:|--:|--:|--:|--:|\n");
+  const int octree_rules = kFirstClusterRule, all_rules = kRuleCount;
+  std::printf("| case | R | octree | clusters | octree: failed rules (first level) | expected | "
+              "full: triangles / loops / comps / χ | triangles at 1 %% | loops | components | χ | same topology | "
+              "max nm | max degen | max folded | max singular | s |\n");
+  std::printf("|---|--:|---|---|---|---|---|--:|---|---|---|---|--:|--:|--:|--:|--:|\n");
   for (const Result& r : results) {
     if (get(r, "pass").empty()) {
-      std::printf("| %s | %s | **%s** | | | | | | | | | | | | | |\n", get(r, "name").c_str(), get(r, "R").c_str(),
+      std::printf("| %s | %s | **%s** | | | | | | | | | | | | | | |\n", get(r, "name").c_str(), get(r, "R").c_str(),
                   get(r, "status").c_str());
       continue;
     }
-    // The first rule to fail first, then the others: "closed @ 1 %, degen @ 60 %".
-    std::string failed;
-    std::vector<std::string> rules = {get(r, "first_fail")};
-    for (const char* rule : kRuleKeys)
-      if (rule != rules.front()) rules.push_back(rule);
-    for (const std::string& rule : rules) {
-      const std::string f = get(r, "fail." + rule);
-      if (f.empty()) continue;
-      if (!failed.empty()) failed += ", ";
-      failed += rule + " @ " + f.substr(0, f.find(" ("));
-    }
-    std::printf("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n",
-                get(r, "name").c_str(), get(r, "R").c_str(), get(r, "pass") == "1" ? "pass" : "**FAIL**",
-                failed.empty() ? "–" : failed.c_str(), get(r, "expect").c_str(),
-                spaced(get(r, "full")).c_str(),
+    std::printf("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n",
+                get(r, "name").c_str(), get(r, "R").c_str(), outcome(get(r, "pass")).c_str(),
+                outcome(get(r, "cl_pass")).c_str(), failed_rules(r, "first_fail", 0, octree_rules).c_str(),
+                get(r, "expect").c_str(), spaced(get(r, "full")).c_str(),
                 get(r, "tris").substr(0, get(r, "tris").find('/')).c_str(), per_level(get(r, "loops")).c_str(),
                 per_level(get(r, "comps")).c_str(), per_level(get(r, "euler")).c_str(),
                 get(r, "same_topology") == "1" ? "yes" : "no", get(r, "max_nm").c_str(), get(r, "max_degen").c_str(),
                 get(r, "max_folded").c_str(), get(r, "max_singular").c_str(), get(r, "build_s").c_str());
   }
 
-  std::printf("\n## Failing cases: first failing rule and where\n\n");
-  if (passed == results.size()) std::printf("None.\n");
+  std::printf("\n## The cluster hierarchy\n\n");
+  std::printf("*Uniform cuts*: judged / all (triangles of the coarsest judged one); maxima over the judged cuts. "
+              "*Full = octree*: the full-detail cut has the octree's 100 %% counts. *Views*: maxima over the %d "
+              "view cuts. *Build s*: the hierarchy's build alone (all cores); *check s*: these checks.\n\n",
+              kCameras * int(kPixelErrors.size()));
+  std::printf("| case | R | clusters | failed rules (first cut or view) | full: triangles / loops / comps / χ | "
+              "full = octree | uniform cuts | max loops / comps / nm / degen | coarse failing | "
+              "view triangles: min / median / max | views: max loops / comps / nm | coarsest | storage | levels | "
+              "build s | check s |\n");
+  std::printf("|---|--:|---|---|---|---|---|---|--:|---|---|--:|--:|--:|--:|--:|\n");
   for (const Result& r : results) {
-    if (get(r, "pass") == "1") continue;
+    if (get(r, "cl_pass").empty()) {
+      std::printf("| %s | %s | **%s** | | | | | | | | | | | | | |\n", get(r, "name").c_str(), get(r, "R").c_str(),
+                  get(r, "status").empty() ? "not run" : get(r, "status").c_str());
+      continue;
+    }
+    const std::string coarsest =
+        get(r, "cl_coarsest_flag") == "1" ? "**" + get(r, "cl_coarsest") + "**" : get(r, "cl_coarsest");
+    std::printf("| %s | %s | %s | %s | %s | %s | %s (%s) | %s / %s / %s / %s | %s | %s | %s / %s / %s | %s | %s | "
+                "%s | %s | %s |\n",
+                get(r, "name").c_str(), get(r, "R").c_str(), outcome(get(r, "cl_pass")).c_str(),
+                failed_rules(r, "cl_first_fail", octree_rules, all_rules).c_str(), spaced(get(r, "cl_full")).c_str(),
+                get(r, "cl_full_same") == "1" ? "yes" : "**no**", spaced(get(r, "cl_cuts")).c_str(),
+                get(r, "cl_smallest_judged").c_str(), get(r, "cl_max_loops").c_str(), get(r, "cl_max_comps").c_str(),
+                get(r, "cl_max_nm").c_str(), get(r, "cl_max_degen").c_str(), get(r, "cl_unjudged_bad").c_str(),
+                spaced(get(r, "cl_view_tris")).c_str(), get(r, "cl_view_max_loops").c_str(),
+                get(r, "cl_view_max_comps").c_str(), get(r, "cl_view_max_nm").c_str(), coarsest.c_str(),
+                get(r, "cl_storage").c_str(), get(r, "cl_levels").c_str(), get(r, "cl_build_s").c_str(),
+                get(r, "cl_check_s").c_str());
+  }
+
+  std::printf("\n## Failing cases: first failing rule and where\n\n");
+  if (both == results.size()) std::printf("None.\n");
+  for (const Result& r : results) {
+    if (get(r, "pass") == "1" && get(r, "cl_pass") == "1") continue;
     if (get(r, "pass").empty()) {
       std::printf("- **%s R=%s**: %s (sweep.sh --logs DIR keeps its output)\n", get(r, "name").c_str(), get(r, "R").c_str(),
                   get(r, "status").c_str());
       continue;
     }
-    const std::string first = get(r, "first_fail");
-    std::printf("- **%s R=%s**: *%s* at %s", get(r, "name").c_str(), get(r, "R").c_str(), first.c_str(),
-                get(r, "fail." + first).c_str());
-    std::string others;
-    for (const char* rule : kRuleKeys)
-      if (rule != first && !get(r, std::string("fail.") + rule).empty())
-        others += (others.empty() ? "" : "; ") + std::string("*") + rule + "* at " + get(r, std::string("fail.") + rule);
-    std::printf("%s\n", others.empty() ? "" : (". Also " + others).c_str());
+    std::printf("- **%s R=%s**:", get(r, "name").c_str(), get(r, "R").c_str());
+    if (get(r, "pass") != "1") std::printf(" octree: %s.", failures_in_full(r, "first_fail", 0, octree_rules).c_str());
+    if (get(r, "cl_pass") == "0")
+      std::printf(" Clusters: %s.", failures_in_full(r, "cl_first_fail", octree_rules, all_rules).c_str());
+    else if (get(r, "cl_pass").empty())
+      std::printf(" Clusters: not checked.");
+    std::printf("\n");
   }
   return 0;
 }

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Runs the LOD robustness sweep from an existing build: every case below in its
-# own scan2lod_bench_sweep process (bench/lod/shape_sweep.cpp says what is
-# checked), then prints the markdown report (progress goes to stderr). Builds nothing.
+# own scan2lod_bench_sweep process, one after the other (bench/lod/shape_sweep.cpp
+# says what is checked: the octree's levels and the cluster hierarchy's uniform
+# and view cuts), then prints the markdown report (progress goes to stderr).
+# Builds nothing.
 #
 #   bench/lod/sweep.sh [--build DIR] [--write] [--quick] [--only REGEX] [--shared DIR] [--logs DIR]
 #
@@ -14,8 +16,8 @@
 #   --logs DIR    keep each case's per-level output in DIR/<name>_<R>.log
 #
 # Examples:
-#   bench/lod/sweep.sh --build build --quick        # ~20 s
-#   bench/lod/sweep.sh --build build --write        # all 74 cases, ~1.5 min on 2 cores
+#   bench/lod/sweep.sh --build build --quick        # ~50 s
+#   bench/lod/sweep.sh --build build --write        # all 74 cases, ~5 min on 2 cores
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -100,7 +102,8 @@ for c in "${selected[@]}"; do
   start=$SECONDS
   # shellcheck disable=SC2086  # args are the case's options, split on purpose
   if "$binary" --name "$name" --resolution "$R" $args "${shared[@]}" >"$log" 2>&1; then
-    outcome="$(grep -q $'^RESULT\t.*\tpass=1\t' "$log" && echo pass || echo FAIL)"
+    outcome="octree $(grep -q $'^RESULT\t.*\tpass=1\t' "$log" && echo pass || echo FAIL)"
+    outcome+=", clusters $(grep -q $'^RESULT\t.*\tcl_pass=1\t' "$log" && echo pass || echo FAIL)"
   else
     status=$?
     outcome="exit status $status"
