@@ -108,11 +108,8 @@ void add_extract_command(CLI::App& app) {
 
     const LodModel model = load_model(args->model);
     // A priority number is the octree's own: it picks the octree when no structure is named.
-    const LodStructure structure = !args->structure.empty()
-                                       ? (args->structure == "octree" ? LodStructure::kOctree : LodStructure::kClusters)
-                                   : priority->count() ? LodStructure::kOctree
-                                                       : default_structure(model);
-    require_structure(model, structure, args->model);
+    const LodStructure structure = structure_named(
+        model, args->structure.empty() && priority->count() ? std::string("octree") : args->structure, args->model);
     LevelExtractor extractor(model, structure);
     LevelCut cut;
     try {

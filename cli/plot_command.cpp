@@ -44,7 +44,7 @@ void add_plot_command(CLI::App& app) {
     const std::vector<double> percents = parse_percent_list(args->percents, "--percent");
     check_png_output(args->output);
     const LodModel model = load_model(args->model);  // file errors first, then the display
-    const LodStructure structure = choose_structure(model, args->structure, args->model);
+    const LodStructure structure = structure_named(model, args->structure, args->model);
     const TriangleMesh reference = args->reference.empty() ? TriangleMesh{} : read_mesh(args->reference);
     require_display("plot");
     std::vector<LevelError> errors;

@@ -46,7 +46,7 @@ void add_render_command(CLI::App& app) {
     options.elevation = args->elevation;
     check_png_output(args->output);
     const LodModel model = load_model(args->model);  // file errors first, then the display
-    const LodStructure structure = choose_structure(model, args->structure, args->model);
+    const LodStructure structure = structure_named(model, args->structure, args->model);
     require_display("render");
     const Montage m = render_montage(model, structure, percents, options, args->output);
     const bool octree = structure == LodStructure::kOctree;

@@ -61,7 +61,7 @@ void add_view_command(CLI::App& app) {
     options.screenshot = args->screenshot;
     options.offscreen = args->offscreen || !args->script.empty();
     ViewerInput input = load_viewer_input(args->inputs);  // file errors first, then the display
-    if (input.model) options.structure = choose_structure(*input.model, args->structure, input.source);
+    if (input.model) options.structure = structure_named(*input.model, args->structure, input.source);
     else if (!args->structure.empty())
       throw InputError(input.source, "--structure applies to a .mco model, not to a mesh or a scan set");
     require_display("view");

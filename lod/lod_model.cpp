@@ -15,6 +15,15 @@ LodStructure default_structure(const LodModel& model) {
   return model.clusters ? LodStructure::kClusters : LodStructure::kOctree;
 }
 
+LodStructure structure_named(const LodModel& model, const std::string& name, const std::string& source) {
+  LodStructure s = default_structure(model);
+  if (name == "clusters") s = LodStructure::kClusters;
+  else if (name == "octree") s = LodStructure::kOctree;
+  else if (!name.empty()) throw InputError("", "--structure must be clusters or octree, got '" + name + "'");
+  require_structure(model, s, source);
+  return s;
+}
+
 void require_structure(const LodModel& model, LodStructure s, const std::string& source) {
   if (!model.has(s))
     throw InputError(source, std::string("the model has no ") + structure_name(s) + " structure (it holds " +
@@ -132,6 +141,24 @@ std::vector<std::uint8_t> LevelExtractor::triangle_levels() const {
   return out;
 }
 
+std::size_t LevelExtractor::octree_priority(const LevelRequest& request) const {
+  const LodArray& lod = model_->octree->lod;
+  using Kind = LevelRequest::Kind;
+  switch (request.kind) {
+    case Kind::kPercent: return priority_for_percent(lod, request.percent);
+    case Kind::kTriangles: return priority_for_triangles(lod, request.triangles);
+    case Kind::kPriority:
+      if (request.priority > lod.full())
+        throw InputError("", "priority " + std::to_string(request.priority) + " is past the octree's " +
+                                 std::to_string(lod.full()) + " expansions");
+      return request.priority;
+    case Kind::kError:
+    case Kind::kCamera: break;
+  }
+  throw InputError("", "the octree offers levels by percent, triangles or priority, not by error or camera; "
+                       "use --structure clusters");
+}
+
 const LevelCut& LevelExtractor::extract(const LevelRequest& request) {
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
@@ -143,21 +170,7 @@ const LevelCut& LevelExtractor::extract(const LevelRequest& request) {
   using Kind = LevelRequest::Kind;
   if (structure_ == LodStructure::kOctree) {
     const OctreeLod& o = *model_->octree;
-    std::size_t p = 0;
-    switch (request.kind) {
-      case Kind::kPercent: p = priority_for_percent(o.lod, request.percent); break;
-      case Kind::kTriangles: p = priority_for_triangles(o.lod, request.triangles); break;
-      case Kind::kPriority:
-        if (request.priority > o.lod.full())
-          throw InputError("", "priority " + std::to_string(request.priority) + " is past the octree's " +
-                                   std::to_string(o.lod.full()) + " expansions");
-        p = request.priority;
-        break;
-      case Kind::kError:
-      case Kind::kCamera:
-        throw InputError("", "the octree offers levels by percent, triangles or priority, not by error or camera; "
-                             "use --structure clusters");
-    }
+    const std::size_t p = octree_priority(request);
     cut_.select_seconds = std::chrono::duration<double>(clock::now() - start).count();
     extract_lod(o.tree, o.lod, p, &expanded_, &cut_.triangles);
     cut_.priority = p;

@@ -59,6 +59,10 @@ struct LodModel {
 // has one (it is the more faithful), else the octree.
 LodStructure default_structure(const LodModel& model);
 
+// The structure `name` ("clusters", "octree", or empty for the default) of
+// `model`. Throws InputError for another name or a structure the model lacks.
+LodStructure structure_named(const LodModel& model, const std::string& name, const std::string& source);
+
 // Throws InputError (naming `source`) unless the model holds `s`.
 void require_structure(const LodModel& model, LodStructure s, const std::string& source);
 
@@ -115,6 +119,9 @@ class LevelExtractor {
   const LevelCut& extract(const LevelRequest& request);
   const LodModel& model() const { return *model_; }
   LodStructure structure() const { return structure_; }
+  // The octree's priority number for a percent, budget or priority request,
+  // as extract() chooses it (octree only). Throws InputError otherwise.
+  std::size_t octree_priority(const LevelRequest& request) const;
   // Triangles at full detail.
   std::int64_t full_triangles() const;
   // Triangles of the coarsest level offered.

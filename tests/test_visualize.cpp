@@ -171,9 +171,9 @@ TEST(VisualizeLevels, LevelSourceGivesTheFacesLevelsOfEitherStructure) {
         EXPECT_GT(*std::max_element(levels.begin(), levels.end()), 0);
     }
   }
-  EXPECT_EQ(scan2lod::choose_structure(model, "", "m.mco"), scan2lod::LodStructure::kClusters);
-  EXPECT_EQ(scan2lod::choose_structure(model, "octree", "m.mco"), scan2lod::LodStructure::kOctree);
-  EXPECT_THROW(scan2lod::choose_structure(model, "tree", "m.mco"), std::runtime_error);
+  EXPECT_EQ(scan2lod::structure_named(model, "", "m.mco"), scan2lod::LodStructure::kClusters);
+  EXPECT_EQ(scan2lod::structure_named(model, "octree", "m.mco"), scan2lod::LodStructure::kOctree);
+  EXPECT_THROW(scan2lod::structure_named(model, "tree", "m.mco"), std::runtime_error);
 }
 
 TEST(VisualizeRender, MontagePanelsShowTheBunnyAndItsLevels) {

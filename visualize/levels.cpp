@@ -1,7 +1,6 @@
 #include "visualize/levels.h"
 
 #include "core/error.h"
-#include "lod/lod_array.h"
 
 #include <algorithm>
 #include <chrono>
@@ -47,11 +46,7 @@ const LevelCut& LevelSource::cut(const LevelRequest& request) {
   // by the cursor's incremental moves.
   const auto start = std::chrono::steady_clock::now();
   const OctreeLod& o = *model_->octree;
-  std::size_t p = 0;
-  if (request.kind == Kind::kPercent) p = priority_for_percent(o.lod, std::clamp(request.percent, 0.0, 100.0));
-  else if (request.kind == Kind::kTriangles) p = priority_for_triangles(o.lod, request.triangles);
-  else if (request.priority <= o.lod.full()) p = request.priority;
-  else return extractor_.extract(request);  // its error message
+  const std::size_t p = extractor_.octree_priority(request);
   const auto selected = std::chrono::steady_clock::now();
   if (!cursor_) cursor_.emplace(o.tree, o.lod);
   cursor_->move_to(p);
@@ -87,15 +82,6 @@ std::vector<double> parse_percent_list(const std::string& text, const std::strin
   }
   if (out.empty()) throw InputError("", flag + " needs at least one percentage, got '" + text + "'");
   return out;
-}
-
-LodStructure choose_structure(const LodModel& model, const std::string& text, const std::string& source) {
-  LodStructure s = default_structure(model);
-  if (text == "clusters") s = LodStructure::kClusters;
-  else if (text == "octree") s = LodStructure::kOctree;
-  else if (!text.empty()) throw InputError("", "--structure must be clusters or octree, got '" + text + "'");
-  require_structure(model, s, source);
-  return s;
 }
 
 }  // namespace scan2lod

@@ -74,9 +74,5 @@ class LevelSource {
 // an empty list, a non-number, or a value outside [0, 100].
 std::vector<double> parse_percent_list(const std::string& text, const std::string& flag);
 
-// Parses --structure's value ("clusters" or "octree"); empty: the model's
-// default. Throws InputError for another word, or require_structure's
-// message (naming `source`) when the model lacks the structure.
-LodStructure choose_structure(const LodModel& model, const std::string& text, const std::string& source);
 
 }  // namespace scan2lod
