@@ -3,13 +3,17 @@
 // hierarchy (Cignoni et al. 2005), or either alone.
 #include "acquisition/load_inputs.h"
 #include "cli/commands.h"
+#include "cli/outputs.h"
 #include "cli/reconstruct_flags.h"
+#include "cli/terminal.h"
 #include "io/mesh_file.h"
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
 #include "lod/model_file.h"
 
 #include "core/progress.h"
+
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -23,7 +27,7 @@ void add_build_command(CLI::App& app) {
     std::vector<std::string> inputs;
     std::string output;
     ReconstructFlags flags;
-    bool verbose = false;
+    bool verbose = false, json = false;
     LodMetric metric = LodMetric::kDeviation;
     std::string structure = "both";
   };
@@ -48,18 +52,21 @@ void add_build_command(CLI::App& app) {
       ->check(CLI::IsMember({"clusters", "octree", "both"}, CLI::ignore_case))
       ->default_str("both");
   cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each reconstruction stage");
+  cmd->add_flag("--json", args->json, "Print the counts and stage times as JSON");
   cmd->callback([args] {
     using clock = std::chrono::steady_clock;
     auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
     const auto start = clock::now();
     const ReconstructOptions& options = args->flags.resolve();
     check_model_output(args->output);
+    refuse_overwriting_inputs(args->output, args->inputs);
     AcquisitionOptions acquisition;
     acquisition.threads = options.threads;
     const bool want_octree = args->structure != "clusters", want_clusters = args->structure != "octree";
     // A single mesh input keeps its own triangles for the cluster hierarchy.
     AcquisitionReport report;
     const OrientedPoints points = load_oriented_points(args->inputs, acquisition, &report);
+    refuse_overwriting_inputs(args->output, report.files);
     const bool mesh_input = report.meshes == 1 && report.files.size() == 1;
     const double read_seconds = since(start);
 
@@ -101,24 +108,41 @@ void add_build_command(CLI::App& app) {
     save_model(args->output, model);
     const double write_seconds = since(stage);
 
+    if (args->json) {
+      nlohmann::ordered_json j = {{"points", points.size()}, {"vertices", model.vertices.size()}};
+      if (model.has(LodStructure::kOctree)) {
+        const OctreeSummary o = describe_octree(model);
+        j["octree"] = {{"nodes", o.nodes}, {"expansions", o.expansions}, {"full_triangles", o.full_triangles}};
+      }
+      if (model.has(LodStructure::kClusters)) {
+        const ClusterSummary c = describe_clusters(model);
+        j["clusters"] = {{"clusters", c.clusters}, {"levels", c.levels}, {"full_triangles", c.full_triangles},
+                         {"coarsest_triangles", c.coarsest_triangles}};
+      }
+      j["output"] = args->output;
+      j["seconds"] = {{"total", since(start)}, {"read", read_seconds}, {"reconstruct", reconstruct_seconds},
+                      {"octree", octree_seconds}, {"clusters", cluster_seconds}, {"write", write_seconds}};
+      std::printf("%s\n", j.dump(2).c_str());
+      return;
+    }
     if (args->verbose) {
       const ReconstructStats& s = r.stats;
-      std::printf("reconstruct: kd-tree %.3f s, signed distances %.3f s, marching cubes %.3f s, "
+      say("reconstruct: kd-tree %.3f s, signed distances %.3f s, marching cubes %.3f s, "
                   "pieces and holes %.3f s, attributes %.3f s\n",
                   s.seconds_index, s.seconds_distances, s.seconds_emit, s.seconds_cleanup, s.seconds_attributes);
     }
-    std::printf("%zu points, %zu vertices", points.size(), model.vertices.size());
+    say("%zu points, %zu vertices", points.size(), model.vertices.size());
     if (model.has(LodStructure::kOctree)) {
       const OctreeSummary o = describe_octree(model);
-      std::printf(", octree: %zu nodes, %zu expansions, %lld triangles at 100%%", o.nodes, o.expansions,
+      say(", octree: %zu nodes, %zu expansions, %lld triangles at 100%%", o.nodes, o.expansions,
                   static_cast<long long>(o.full_triangles));
     }
     if (model.has(LodStructure::kClusters)) {
       const ClusterSummary c = describe_clusters(model);
-      std::printf(", clusters: %zu in %d levels, %lld triangles at 100%%", c.clusters, c.levels,
+      say(", clusters: %zu in %d levels, %lld triangles at 100%%", c.clusters, c.levels,
                   static_cast<long long>(c.full_triangles));
     }
-    std::printf(", %.2f s (read %.2f s, reconstruct %.2f s, octree %.2f s, clusters %.2f s, write %.2f s) -> %s\n",
+    say(", %.2f s (read %.2f s, reconstruct %.2f s, octree %.2f s, clusters %.2f s, write %.2f s) -> %s\n",
                 since(start), read_seconds, reconstruct_seconds, octree_seconds, cluster_seconds, write_seconds,
                 args->output.c_str());
   });

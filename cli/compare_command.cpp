@@ -1,4 +1,5 @@
 #include "cli/commands.h"
+#include "cli/terminal.h"
 #include "core/error.h"
 #include "io/mesh_file.h"
 #include "measure/surface_distance.h"
@@ -31,27 +32,27 @@ nlohmann::json to_json(const MeshTopology& t) {
 }
 
 void print_table(const std::string& a, const std::string& b, const SurfaceComparison& c) {
-  std::printf("A: %s\nB: %s\nB's bounding-box diagonal: %.6g (percentages below are of it)\n\n",
+  say("A: %s\nB: %s\nB's bounding-box diagonal: %.6g (percentages below are of it)\n\n",
               a.c_str(), b.c_str(), c.diagonal);
   const double scale = c.diagonal > 0 ? 100.0 / c.diagonal : 0.0;
-  std::printf("%-8s %10s  %-22s  %-22s  %-22s  %s\n", "", "samples", "mean", "rms", "p95", "max");
+  say("%-8s %10s  %-22s  %-22s  %-22s  %s\n", "", "samples", "mean", "rms", "p95", "max");
   auto row = [&](const char* name, const DistanceStats& s) {
-    std::printf("%-8s %10zu", name, s.samples);
+    say("%-8s %10zu", name, s.samples);
     const double values[] = {s.mean, s.rms, s.p95, s.max};
     for (int i = 0; i < 4; ++i) {
       char cell[64];
       std::snprintf(cell, sizeof cell, "%.4e (%.4f%%)", values[i], values[i] * scale);
-      std::printf(i < 3 ? "  %-22s" : "  %s\n", cell);
+      say(i < 3 ? "  %-22s" : "  %s\n", cell);
     }
   };
   row("A -> B", c.a_to_b);
   row("B -> A", c.b_to_a);
 
-  std::printf("\n%-28s %12s %12s\n", "topology", "A", "B");
+  say("\n%-28s %12s %12s\n", "topology", "A", "B");
   const MeshTopology& ta = c.a;
   const MeshTopology& tb = c.b;
   auto line = [](const char* name, long long x, long long y) {
-    std::printf("%-28s %12lld %12lld\n", name, x, y);
+    say("%-28s %12lld %12lld\n", name, x, y);
   };
   line("vertices", (long long)ta.vertices, (long long)tb.vertices);
   line("referenced vertices", (long long)ta.referenced_vertices, (long long)tb.referenced_vertices);

@@ -1,5 +1,8 @@
 #include "acquisition/scan_set.h"
 #include "cli/commands.h"
+#include "cli/terminal.h"
+
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -15,6 +18,7 @@ void add_convert_command(CLI::App& app) {
     std::string output;
     std::string conf_name = "scans.conf";
     int threads = 0;
+    bool json = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
@@ -23,6 +27,7 @@ void add_convert_command(CLI::App& app) {
   cmd->add_option("-o,--output", args->output, "Output folder")->required();
   cmd->add_option("--conf", args->conf_name, "Name of the .conf written in the folder")->capture_default_str();
   cmd->add_option("-j,--threads", args->threads, "Threads (0: all cores)")->capture_default_str();
+  cmd->add_flag("--json", args->json, "Print the counts as JSON");
   cmd->callback([args] {
     const auto start = std::chrono::steady_clock::now();
     std::vector<PlacedScan> scans = read_scan_set(args->inputs, args->threads);
@@ -31,8 +36,14 @@ void add_convert_command(CLI::App& app) {
     for (const PlacedScan& s : scans)
       for (const Vec3f& p : s.image.points) samples += std::isfinite(p.x());
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::printf("%zu scans, %zu samples, %.2f s -> %s\n", scans.size(), samples, seconds,
-                (std::filesystem::path(args->output) / args->conf_name).string().c_str());
+    const std::string conf = (std::filesystem::path(args->output) / args->conf_name).string();
+    if (args->json) {
+      const nlohmann::ordered_json j = {{"scans", scans.size()}, {"samples", samples}, {"seconds", seconds},
+                                        {"output", conf}};
+      std::printf("%s\n", j.dump(2).c_str());
+      return;
+    }
+    say("%zu scans, %zu samples, %.2f s -> %s\n", scans.size(), samples, seconds, conf.c_str());
   });
 }
 

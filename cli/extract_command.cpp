@@ -2,6 +2,8 @@
 // either LOD structure (lod/lod_model.h): by percent, triangle budget,
 // object-space error, camera, or (octree) priority number.
 #include "cli/commands.h"
+#include "cli/outputs.h"
+#include "cli/terminal.h"
 #include "core/error.h"
 #include "io/mesh_file.h"
 #include "lod/lod_model.h"
@@ -50,12 +52,13 @@ void add_extract_command(CLI::App& app) {
     double percent = 0, error = 0, fov = 45, pixel_error = 1;
     long long triangles = 0, priority = 0;
     int height = 1080;
-    bool json = false;
+    bool json = false, no_quantize = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("extract", "One level of detail of a .mco model -> mesh");
   cmd->add_option("model", args->model, "Model written by scan2lod build (.mco)")->required();
-  cmd->add_option("-o,--output", args->output, "Output mesh (.ply .obj .stl .off .vtp)")->required();
+  cmd->add_option("-o,--output", args->output, "Output mesh (.ply .obj .stl .off .vtp .glb .gltf)")->required();
+  cmd->add_flag("--no-quantize", args->no_quantize, "glTF: 32-bit float positions and normals");
   cmd->add_option("--structure", args->structure,
                   "clusters or octree (default: clusters when the model has them)")
       ->check(CLI::IsMember({"clusters", "octree"}, CLI::ignore_case));
@@ -105,6 +108,7 @@ void add_extract_command(CLI::App& app) {
       request = LevelRequest::for_camera(view, args->pixel_error);
     }
     check_mesh_output(args->output);
+    refuse_overwriting_inputs(args->output, {args->model});
 
     const LodModel model = load_model(args->model);
     // A priority number is the octree's own: it picks the octree when no structure is named.
@@ -117,10 +121,19 @@ void add_extract_command(CLI::App& app) {
     } catch (const InputError& e) {
       throw InputError(args->model, e.what());
     }
+    if (cut.triangles.empty() || (triangles->count() && std::int64_t(cut.triangles.size()) > args->triangles))
+      throw InputError(args->model, cut.triangles.empty()
+                                        ? std::string("the level asked for has no triangles; ask for a finer one")
+                                        : "no level has at most " + std::to_string(args->triangles) +
+                                              " triangles; the coarsest level offered has " +
+                                              std::to_string(extractor.coarsest_triangles()));
     const auto start = std::chrono::steady_clock::now();
     const TriangleMesh mesh = compact_level(model, cut.triangles);
     const double compact_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    write_mesh(args->output, mesh);
+    MeshWriteOptions write;
+    write.quantize = !args->no_quantize;
+    write.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
+    write_mesh(args->output, mesh, write);
 
     if (args->json) {
       nlohmann::ordered_json j = {{"structure", structure_name(structure)},
@@ -137,12 +150,12 @@ void add_extract_command(CLI::App& app) {
       j["extract_seconds"] = cut.extract_seconds + compact_seconds;
       std::printf("%s\n", j.dump(2).c_str());
     } else if (structure == LodStructure::kClusters) {
-      std::printf("clusters: %zu clusters, %zu triangles (%.1f %%), %zu vertices, error %.3g, selected in %.3f ms, "
+      say("clusters: %zu clusters, %zu triangles (%.1f %%), %zu vertices, error %.3g, selected in %.3f ms, "
                   "extracted in %.2f ms -> %s\n",
                   cut.clusters, mesh.triangles.size(), cut.percent, mesh.positions.size(), cut.error,
                   cut.select_seconds * 1e3, (cut.extract_seconds + compact_seconds) * 1e3, args->output.c_str());
     } else {
-      std::printf("octree: priority %zu (%.1f %%), %zu triangles, %zu vertices, extracted in %.2f ms -> %s\n",
+      say("octree: priority %zu (%.1f %%), %zu triangles, %zu vertices, extracted in %.2f ms -> %s\n",
                   cut.priority, cut.percent, mesh.triangles.size(), mesh.positions.size(),
                   (cut.extract_seconds + compact_seconds) * 1e3, args->output.c_str());
     }

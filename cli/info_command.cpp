@@ -1,6 +1,7 @@
 // scan2lod info: what a .mco model holds, and the size of each structure's
 // levels at the usual percentages (Lee 2007, Figs. 6.3-6.4).
 #include "cli/commands.h"
+#include "cli/terminal.h"
 #include "lod/lod_model.h"
 #include "lod/model_file.h"
 
@@ -31,7 +32,7 @@ void add_info_command(CLI::App& app) {
     std::error_code ec;
     const auto bytes = std::filesystem::file_size(args->model, ec);
     if (!args->json)
-      std::printf("%s: %.1f MB, loaded in %.3f s, %zu vertices\n", args->model.c_str(), ec ? 0.0 : double(bytes) / 1e6,
+      say("%s: %.1f MB, loaded in %.3f s, %zu vertices\n", args->model.c_str(), ec ? 0.0 : double(bytes) / 1e6,
                   load_seconds, model.vertices.size());
 
     if (model.has(LodStructure::kOctree)) {
@@ -50,17 +51,17 @@ void add_info_command(CLI::App& app) {
                                 "levels_of_detail"})
           j[key] = j["octree"][key];
       } else {
-        std::printf("\noctree: resolution %d (depth %d), cube size %.6g, origin (%.6g, %.6g, %.6g)\n", o.resolution,
+        say("\noctree: resolution %d (depth %d), cube size %.6g, origin (%.6g, %.6g, %.6g)\n", o.resolution,
                     o.depth, o.cube_size, o.origin.x(), o.origin.y(), o.origin.z());
-        std::printf("%zu nodes, %zu leaves, %zu expansions; nodes per level:", o.nodes, o.leaves, o.expansions);
-        for (std::size_t c : o.nodes_per_level) std::printf(" %zu", c);
+        say("%zu nodes, %zu leaves, %zu expansions; nodes per level:", o.nodes, o.leaves, o.expansions);
+        for (std::size_t c : o.nodes_per_level) say(" %zu", c);
         if (o.pinned)
-          std::printf("\nthe first %zu expansions (%lld triangles) keep the rim at full detail: no level is offered "
+          say("\nthe first %zu expansions (%lld triangles) keep the rim at full detail: no level is offered "
                       "inside them",
                       o.pinned, static_cast<long long>(o.pinned_triangles));
-        std::printf("\n\n%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
+        say("\n\n%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
         for (const LevelSummary& l : lods)
-          std::printf("%6g %10zu %10zu %10zu\n", l.percent, l.priority, l.triangles, l.vertices);
+          say("%6g %10zu %10zu %10zu\n", l.percent, l.priority, l.triangles, l.vertices);
       }
     }
     if (model.has(LodStructure::kClusters)) {
@@ -79,14 +80,14 @@ void add_info_command(CLI::App& app) {
                          {"coarsest_triangles", c.coarsest_triangles},
                          {"levels_of_detail", levels}};
       } else {
-        std::printf("\nclusters: %zu clusters in %zu groups over %d levels; %zu triangles stored (%.2fx the full "
+        say("\nclusters: %zu clusters in %zu groups over %d levels; %zu triangles stored (%.2fx the full "
                     "mesh's %lld); the coarsest cut has %lld\n",
                     c.clusters, c.groups, c.levels, c.stored_triangles,
                     c.full_triangles ? double(c.stored_triangles) / double(c.full_triangles) : 0.0,
                     static_cast<long long>(c.full_triangles), static_cast<long long>(c.coarsest_triangles));
-        std::printf("\n%6s %10s %10s %10s %10s\n", "LOD %", "error", "clusters", "triangles", "vertices");
+        say("\n%6s %10s %10s %10s %10s\n", "LOD %", "error", "clusters", "triangles", "vertices");
         for (const LevelSummary& l : lods)
-          std::printf("%6g %10.3g %10zu %10zu %10zu\n", l.percent, l.error, l.clusters, l.triangles, l.vertices);
+          say("%6g %10.3g %10zu %10zu %10zu\n", l.percent, l.error, l.clusters, l.triangles, l.vertices);
       }
     }
     if (args->json) std::printf("%s\n", j.dump(2).c_str());

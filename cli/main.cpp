@@ -1,33 +1,55 @@
 #include "cli/commands.h"
-#include "core/progress.h"
+#include "cli/exit_codes.h"
+#include "cli/terminal.h"
+#include "core/error.h"
+#include "lod/model_file.h"
 
 #include <cstdio>
 #include <exception>
+#include <new>
+#include <string>
 
 int main(int argc, char** argv) {
-  CLI::App app{"scan2lod: range scans to continuous level-of-detail models"};
+  using namespace scan2lod::cli;
+  CLI::App app{"scan2lod: range scans, point clouds and meshes to level-of-detail models"};
   app.require_subcommand(1);
   app.fallthrough();
+  app.footer(exit_code_help());
+  app.set_version_flag("--version", std::string("scan2lod ") + SCAN2LOD_VERSION + " (model format " +
+                                        std::to_string(scan2lod::kModelFormatMajor) + "." +
+                                        std::to_string(scan2lod::kModelFormatMinor) + ")");
   bool quiet = false;
-  app.add_flag("-q,--quiet", quiet, "No progress output");
-  app.parse_complete_callback([&] { scan2lod::Progress::set_quiet(quiet); });
-  scan2lod::cli::add_reconstruct_command(app);
-  scan2lod::cli::add_scan_command(app);
-  scan2lod::cli::add_compare_command(app);
-  scan2lod::cli::add_convert_command(app);
-  scan2lod::cli::add_build_command(app);
-  scan2lod::cli::add_extract_command(app);
-  scan2lod::cli::add_info_command(app);
-  scan2lod::cli::add_render_command(app);
-  scan2lod::cli::add_plot_command(app);
-  scan2lod::cli::add_view_command(app);
+  app.add_flag("-q,--quiet", quiet, "Print nothing but errors (and the JSON asked for with --json)");
+  app.parse_complete_callback([&] {
+    set_quiet(quiet);
+    if (!quiet) install_terminal_progress();
+  });
+  add_reconstruct_command(app);
+  add_scan_command(app);
+  add_compare_command(app);
+  add_convert_command(app);
+  add_build_command(app);
+  add_extract_command(app);
+  add_export_command(app);
+  add_info_command(app);
+  add_render_command(app);
+  add_plot_command(app);
+  add_view_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  } catch (const std::exception& e) {
+    // CLI11's own codes (104-114) say which parse rule failed; users and
+    // scripts get one documented code for every usage error.
+    return app.exit(e) == 0 ? kExitOk : kExitUsage;
+  } catch (const scan2lod::InputError& e) {
     std::fprintf(stderr, "scan2lod: error: %s\n", e.what());
-    return 1;
+    return kExitInput;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "scan2lod: error: out of memory\n");
+    return kExitMemory;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "scan2lod: internal error: %s\n", e.what());
+    return kExitInternal;
   }
-  return 0;
+  return kExitOk;
 }

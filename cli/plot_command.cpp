@@ -3,12 +3,15 @@
 // and vertices against triangles), plus error against triangles given a
 // reference mesh.
 #include "cli/commands.h"
+#include "cli/terminal.h"
 #include "io/mesh_file.h"
 #include "lod/model_file.h"
 #include "visualize/levels.h"
 #include "visualize/montage.h"
 #include "visualize/plots.h"
 #include "visualize/png_output.h"
+
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <memory>
@@ -20,7 +23,7 @@ void add_plot_command(CLI::App& app) {
     std::string model, output, reference, percents = "1,2,5,10,20,30,40,50,60,70,80,90,100", size = "520x400";
     std::string structure;
     std::size_t samples = 20000;
-    bool linear = false;
+    bool linear = false, json = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("plot", "LOD metric and accumulation graphs of a .mco model -> PNG");
@@ -37,6 +40,7 @@ void add_plot_command(CLI::App& app) {
   cmd->add_option("--structure", args->structure,
                   "LOD structure to plot: clusters or octree (default: clusters when the model has them)")
       ->check(CLI::IsMember({"clusters", "octree"}));
+  cmd->add_flag("--json", args->json, "Print the charts and measured levels as JSON");
   cmd->callback([args] {
     PlotOptions options;
     parse_size(args->size, "--size", &options.chart_width, &options.chart_height);
@@ -51,23 +55,35 @@ void add_plot_command(CLI::App& app) {
     if (!args->reference.empty()) {
       errors = level_errors(model, structure, reference, percents, args->samples);
       const bool octree = structure == LodStructure::kOctree;
-      std::printf("%6s %10s %10s %12s %12s\n", "LOD %", octree ? "priority" : "error", "triangles", "to ref %",
+      say("%6s %10s %10s %12s %12s\n", "LOD %", octree ? "priority" : "error", "triangles", "to ref %",
                   "from ref %");
       for (const LevelError& e : errors) {
         if (octree)
-          std::printf("%6g %10zu %10zu %12.4f %12.4f\n", e.percent, e.priority, e.triangles, e.mean_to_reference,
+          say("%6g %10zu %10zu %12.4f %12.4f\n", e.percent, e.priority, e.triangles, e.mean_to_reference,
                       e.mean_from_reference);
         else
-          std::printf("%6g %10.4g %10zu %12.4f %12.4f\n", e.percent, e.error, e.triangles, e.mean_to_reference,
+          say("%6g %10.4g %10zu %12.4f %12.4f\n", e.percent, e.error, e.triangles, e.mean_to_reference,
                       e.mean_from_reference);
       }
     }
     const PlotPicture p = write_lod_plots(model, structure, errors, options, args->output);
+    if (args->json) {
+      nlohmann::ordered_json j = {{"structure", structure_name(structure)}, {"charts", p.charts.size()},
+                                  {"full_triangles", p.full_triangles}, {"width", p.width}, {"height", p.height},
+                                  {"output", args->output}};
+      j["levels"] = nlohmann::ordered_json::array();
+      for (const LevelError& e : errors)
+        j["levels"].push_back({{"percent", e.percent}, {"triangles", e.triangles}, {"priority", e.priority},
+                               {"error", e.error}, {"mean_to_reference_percent", e.mean_to_reference},
+                               {"mean_from_reference_percent", e.mean_from_reference}});
+      std::printf("%s\n", j.dump(2).c_str());
+      return;
+    }
     if (structure == LodStructure::kOctree)
-      std::printf("%zu charts (octree: %zu priorities, %lld triangles at full detail), %dx%d pixels -> %s\n",
+      say("%zu charts (octree: %zu priorities, %lld triangles at full detail), %dx%d pixels -> %s\n",
                   p.charts.size(), p.priorities, (long long)p.full_triangles, p.width, p.height, args->output.c_str());
     else
-      std::printf("%zu charts (clusters: %lld triangles at full detail), %dx%d pixels -> %s\n", p.charts.size(),
+      say("%zu charts (clusters: %lld triangles at full detail), %dx%d pixels -> %s\n", p.charts.size(),
                   (long long)p.full_triangles, p.width, p.height, args->output.c_str());
   });
 }

@@ -1,8 +1,12 @@
 #include "acquisition/load_inputs.h"
 #include "cli/commands.h"
+#include "cli/outputs.h"
 #include "cli/reconstruct_flags.h"
+#include "cli/terminal.h"
 #include "io/mesh_file.h"
 #include "reconstruct/marching_cubes.h"
+
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -15,7 +19,7 @@ void add_reconstruct_command(CLI::App& app) {
     std::vector<std::string> inputs;
     std::string output;
     ReconstructFlags flags;
-    bool verbose = false;
+    bool verbose = false, json = false, no_quantize = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
@@ -23,7 +27,9 @@ void add_reconstruct_command(CLI::App& app) {
   cmd->add_option("inputs", args->inputs,
                   "A .conf, range-grid PLYs, organized PCDs, or a mesh (.ply .obj .off .stl)")
       ->required();
-  cmd->add_option("-o,--output", args->output, "Output mesh (.ply .obj .stl .off .vtp)")->required();
+  cmd->add_option("-o,--output", args->output, "Output mesh (.ply .obj .stl .off .vtp .glb .gltf)")->required();
+  cmd->add_flag("--no-quantize", args->no_quantize, "glTF: 32-bit float positions and normals");
+  cmd->add_flag("--json", args->json, "Print the counts and stage times as JSON");
   add_reconstruct_flags(cmd, &args->flags);
   cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each stage");
   cmd->callback([args] {
@@ -31,26 +37,45 @@ void add_reconstruct_command(CLI::App& app) {
     const auto start = clock::now();
     const ReconstructOptions& options = args->flags.resolve();
     check_mesh_output(args->output);
+    refuse_overwriting_inputs(args->output, args->inputs);
     AcquisitionOptions acquisition;
     acquisition.threads = options.threads;
-    OrientedPoints points = load_oriented_points(args->inputs, acquisition);
+    AcquisitionReport report;
+    OrientedPoints points = load_oriented_points(args->inputs, acquisition, &report);
+    refuse_overwriting_inputs(args->output, report.files);
     const double read_seconds = std::chrono::duration<double>(clock::now() - start).count();
     Reconstruction r = reconstruct(points, options);
     require_surface(args->inputs, r, options.resolution);
     const auto write_start = clock::now();
-    write_mesh(args->output, r.mesh);
+    MeshWriteOptions write;
+    write.quantize = !args->no_quantize;
+    write.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
+    write_mesh(args->output, r.mesh, write);
+    const double write_seconds = std::chrono::duration<double>(clock::now() - write_start).count();
+    const double seconds = std::chrono::duration<double>(clock::now() - start).count();
+    if (args->json) {
+      const ReconstructStats& s = r.stats;
+      const nlohmann::ordered_json j = {
+          {"points", s.points}, {"cubes_touched", s.cubes_touched}, {"cubes_emitting", s.cubes_emitting},
+          {"triangles", r.mesh.triangles.size()}, {"vertices", r.mesh.positions.size()}, {"output", args->output},
+          {"seconds", {{"total", seconds}, {"read", read_seconds}, {"kd_tree", s.seconds_index},
+                       {"signed_distances", s.seconds_distances}, {"marching_cubes", s.seconds_emit},
+                       {"pieces_and_holes", s.seconds_cleanup}, {"attributes", s.seconds_attributes},
+                       {"write", write_seconds}}}};
+      std::printf("%s\n", j.dump(2).c_str());
+      return;
+    }
     if (args->verbose) {
       const ReconstructStats& s = r.stats;
-      std::printf("read %.3f s, kd-tree %.3f s, signed distances %.3f s (%zu corners, %zu following rounds), "
+      say("read %.3f s, kd-tree %.3f s, signed distances %.3f s (%zu corners, %zu following rounds), "
                   "marching cubes %.3f s, pieces and holes %.3f s (%zu triangles dropped, %zu cubes closing holes), "
                   "attributes %.3f s, write %.3f s\n",
                   read_seconds, s.seconds_index, s.seconds_distances, s.corners_evaluated, s.following_rounds,
                   s.seconds_emit, s.seconds_cleanup, s.triangles_dropped, s.cubes_hole_closing,
                   s.seconds_attributes,
-                  std::chrono::duration<double>(clock::now() - write_start).count());
+                  write_seconds);
     }
-    const double seconds = std::chrono::duration<double>(clock::now() - start).count();
-    std::printf("%zu points, %zu cubes touched, %zu emitting, %zu triangles, %zu vertices, %.2f s -> %s\n",
+    say("%zu points, %zu cubes touched, %zu emitting, %zu triangles, %zu vertices, %.2f s -> %s\n",
                 r.stats.points, r.stats.cubes_touched, r.stats.cubes_emitting,
                 r.mesh.triangles.size(), r.mesh.positions.size(), seconds, args->output.c_str());
   });

@@ -2,6 +2,7 @@
 // octree, --structure) off-screen into one PNG montage, the layout of the
 // seed's Fig. 6.3 (wireframe beside shaded, one row per level).
 #include "cli/commands.h"
+#include "cli/terminal.h"
 #include "core/error.h"
 #include "lod/lod_model.h"
 #include "lod/model_file.h"
@@ -9,6 +10,8 @@
 #include "visualize/montage.h"
 #include "visualize/png_output.h"
 #include "visualize/scene.h"
+
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <memory>
@@ -19,6 +22,7 @@ void add_render_command(CLI::App& app) {
   struct Args {
     std::string model, output, percents = "100,80,60,40,20", size = "400x400", mode = "both", structure;
     double azimuth = 0, elevation = 0;
+    bool json = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("render", "Levels of a .mco model -> one PNG montage (off-screen)");
@@ -37,6 +41,7 @@ void add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--azimuth", args->azimuth, "Turn the camera about the up axis (degrees)")->capture_default_str();
   cmd->add_option("--elevation", args->elevation, "Raise the camera (degrees)")->capture_default_str();
+  cmd->add_flag("--json", args->json, "Print the panels as JSON");
   cmd->callback([args] {
     MontageOptions options;
     const std::vector<double> percents = parse_percent_list(args->percents, "--percent");
@@ -50,15 +55,26 @@ void add_render_command(CLI::App& app) {
     require_display("render");
     const Montage m = render_montage(model, structure, percents, options, args->output);
     const bool octree = structure == LodStructure::kOctree;
-    if (octree) std::printf("%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
-    else std::printf("%6s %12s %10s %10s %10s\n", "LOD %", "error", "clusters", "triangles", "vertices");
+    if (args->json) {
+      nlohmann::ordered_json j = {{"structure", structure_name(structure)}, {"width", m.width},
+                                  {"height", m.height}, {"output", args->output}};
+      j["panels"] = nlohmann::ordered_json::array();
+      for (const MontagePanel& p : m.panels)
+        j["panels"].push_back({{"percent", p.percent}, {"wireframe", p.mode == RenderMode::wireframe},
+                               {"triangles", p.triangles}, {"vertices", p.vertices}, {"priority", p.priority},
+                               {"error", p.error}, {"clusters", p.clusters}});
+      std::printf("%s\n", j.dump(2).c_str());
+      return;
+    }
+    if (octree) say("%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
+    else say("%6s %12s %10s %10s %10s\n", "LOD %", "error", "clusters", "triangles", "vertices");
     const std::size_t step = options.mode == RenderMode::both ? 2 : 1;
     for (std::size_t i = 0; i < m.panels.size(); i += step) {
       const MontagePanel& p = m.panels[i];
-      if (octree) std::printf("%6g %10zu %10zu %10zu\n", p.percent, p.priority, p.triangles, p.vertices);
-      else std::printf("%6g %12.6g %10zu %10zu %10zu\n", p.percent, p.error, p.clusters, p.triangles, p.vertices);
+      if (octree) say("%6g %10zu %10zu %10zu\n", p.percent, p.priority, p.triangles, p.vertices);
+      else say("%6g %12.6g %10zu %10zu %10zu\n", p.percent, p.error, p.clusters, p.triangles, p.vertices);
     }
-    std::printf("%zu panels, %dx%d pixels -> %s\n", m.panels.size(), m.width, m.height, args->output.c_str());
+    say("%zu panels, %dx%d pixels -> %s\n", m.panels.size(), m.width, m.height, args->output.c_str());
   });
 }
 

@@ -2,7 +2,10 @@
 // written as a Stanford-style scan set that `reconstruct` reads back.
 #include "acquisition/virtual_scanner.h"
 #include "cli/commands.h"
+#include "cli/terminal.h"
 #include "io/mesh_file.h"
+
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -18,6 +21,7 @@ struct ScanArgs {
   std::string out_dir;
   std::string size = "256x256";
   VirtualScanOptions options;
+  bool json = false;
 };
 
 // "WxH" with both in [1, 16384]; returns false on anything else.
@@ -38,7 +42,14 @@ void run(ScanArgs& args) {
   std::size_t samples = 0;
   for (const VirtualScan& s : scans)
     for (const Vec3f& p : s.image.points) samples += !std::isnan(p.x());
-  std::printf("scanned %s: %zu views of %dx%d, %zu samples -> %s/scans.conf\n",
+  if (args.json) {
+    const nlohmann::ordered_json j = {{"mesh", args.mesh}, {"views", scans.size()}, {"width", args.options.width},
+                                      {"height", args.options.height}, {"samples", samples},
+                                      {"output", args.out_dir + "/scans.conf"}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  say("scanned %s: %zu views of %dx%d, %zu samples -> %s/scans.conf\n",
               args.mesh.c_str(), scans.size(), args.options.width, args.options.height, samples,
               args.out_dir.c_str());
 }
@@ -66,6 +77,7 @@ void add_scan_command(CLI::App& app) {
             return "expected WIDTHxHEIGHT such as 256x256 (each 1..16384), got '" + text + "'";
           },
           "WxH"));
+  cmd->add_flag("--json", args->json, "Print the counts as JSON");
   cmd->callback([args] { run(*args); });
 }
 

@@ -42,7 +42,7 @@ void add_view_command(CLI::App& app) {
   cmd->add_option("--script", args->script,
                   "Run commands from FILE instead of waiting for a user, print the state after each, and exit "
                   "(percent P | triangles T | slider V | key KEY | orbit DEGREES | zoom FACTOR | screenshot PATH | print)");
-  cmd->add_flag("--offscreen", args->offscreen, "Render without showing a window (implied by --script)");
+  cmd->add_flag("--offscreen", args->offscreen, "Render without showing a window (with --script; implied by it)");
   cmd->callback([args] {
     ViewerOptions options;
     parse_size(args->size, "--size", &options.width, &options.height);
@@ -50,6 +50,9 @@ void add_view_command(CLI::App& app) {
       throw InputError("", "--percent must be between 0 and 100, got " + std::to_string(args->percent));
     if (!(args->compare >= 0 && args->compare <= 100))
       throw InputError("", "--compare must be between 0 and 100, got " + std::to_string(args->compare));
+    if (args->offscreen && args->script.empty())
+      throw InputError("", "--offscreen needs --script: an off-screen viewer with nobody to drive it would never "
+                           "end (for pictures without a script, use scan2lod render)");
     check_png_output(args->screenshot);
     std::ifstream script;
     if (!args->script.empty()) {

@@ -42,4 +42,11 @@ MeshEdges mesh_edges(const std::vector<Triangle>& triangles, std::size_t vertex_
   return edges;
 }
 
+double mean_edge_length(const std::vector<Vec3f>& p, const std::vector<Triangle>& triangles) {
+  double sum = 0;
+  for (const Triangle& t : triangles)
+    for (int k = 0; k < 3; ++k) sum += (p[std::size_t(t[k])] - p[std::size_t(t[(k + 1) % 3])]).norm();
+  return triangles.empty() ? 0 : sum / double(3 * triangles.size());
+}
+
 }  // namespace scan2lod

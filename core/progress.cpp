@@ -1,13 +1,12 @@
 #include "core/progress.h"
 
-#include <unistd.h>
-
 #include <chrono>
-#include <cstdio>
+#include <utility>
 
 namespace scan2lod {
 namespace {
 std::atomic<bool> g_quiet{false};
+ProgressSink g_sink;
 
 long long now_ms() {
   using namespace std::chrono;
@@ -15,39 +14,36 @@ long long now_ms() {
 }
 }  // namespace
 
+void set_progress_sink(ProgressSink sink) { g_sink = std::move(sink); }
+
 void Progress::set_quiet(bool quiet) { g_quiet = quiet; }
-bool Progress::enabled() { return !g_quiet && isatty(fileno(stderr)); }
+bool Progress::enabled() { return !g_quiet && bool(g_sink); }
 
 Progress::Progress(std::string label, std::size_t total)
     : label_(std::move(label)), total_(total), active_(enabled()) {
-  if (active_) draw(0);
+  if (active_) report(0, false);
 }
 
 Progress::~Progress() { finish(); }
 
 void Progress::advance(std::size_t n) {
-  std::size_t done = done_.fetch_add(n) + n;
+  const std::size_t done = done_.fetch_add(n) + n;
   if (!active_) return;
-  long long t = now_ms();
-  long long last = last_draw_ms_.load();
-  if (t - last >= 100 && last_draw_ms_.compare_exchange_strong(last, t)) draw(done);
+  const long long t = now_ms();
+  long long last = last_report_ms_.load();
+  if (t - last >= 100 && last_report_ms_.compare_exchange_strong(last, t)) report(done, false);
 }
 
 void Progress::finish() {
   if (!active_ || finished_) return;
   finished_ = true;
-  draw(total_);
-  std::fputc('\n', stderr);
+  report(total_, true);
 }
 
-void Progress::draw(std::size_t done) {
-  const int width = 30;
+void Progress::report(std::size_t done, bool finished) {
   double f = total_ ? double(done) / double(total_) : 1.0;
   if (f > 1.0) f = 1.0;
-  int filled = int(f * width);
-  std::fprintf(stderr, "\r%-22s [%.*s%*s] %3d%%", label_.c_str(), filled,
-               "##############################", width - filled, "", int(f * 100.0));
-  std::fflush(stderr);
+  g_sink(label_, f, finished);
 }
 
 }  // namespace scan2lod

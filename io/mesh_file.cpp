@@ -2,6 +2,8 @@
 
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/gltf_file.h"
+#include "io/obj_writer.h"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/IO/exporter/BaseExporter.hh>
@@ -9,7 +11,6 @@
 #include <OpenMesh/Core/IO/reader/OFFReader.hh>
 #include <OpenMesh/Core/IO/reader/PLYReader.hh>
 #include <OpenMesh/Core/IO/reader/STLReader.hh>
-#include <OpenMesh/Core/IO/writer/OBJWriter.hh>
 #include <OpenMesh/Core/IO/writer/OFFWriter.hh>
 #include <OpenMesh/Core/IO/writer/PLYWriter.hh>
 #include <OpenMesh/Core/IO/writer/STLWriter.hh>
@@ -972,9 +973,6 @@ void write_with_openmesh(const std::string& tmp, const std::string& final_path,
     opt += omio::Options::LSB;
     if (has_n) opt += omio::Options::VertexNormal;
     if (has_c) opt += omio::Options::VertexColor;
-  } else if (ext == ".obj") {
-    writer = &omio::OBJWriter();
-    if (has_n) opt += omio::Options::VertexNormal;
   } else if (ext == ".off") {
     writer = &omio::OFFWriter();
     if (has_n) opt += omio::Options::VertexNormal;
@@ -1051,6 +1049,7 @@ void write_vtp(const std::string& tmp, const std::string& final_path, const Tria
 }
 
 const char* const kFormats = ".ply, .obj, .off, .stl or .vtp";
+const char* const kOutputFormats = ".ply, .obj, .off, .stl, .vtp, .glb or .gltf";
 
 }  // namespace
 
@@ -1081,24 +1080,30 @@ TriangleMesh read_mesh(const std::string& path) {
 
 void check_mesh_output(const std::string& path) {
   const std::string ext = lower_extension(path);
-  if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl" && ext != ".vtp")
-    throw InputError(path, "unknown mesh extension '" + ext + "', expected " + kFormats);
-  const fs::path folder = fs::path(path).parent_path();
-  std::error_code ec;
-  if (!folder.empty() && !fs::is_directory(folder, ec))
-    throw InputError(path, "cannot write: folder " + folder.string() + " does not exist");
+  if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl" && ext != ".vtp" && !is_gltf_path(path))
+    throw InputError(path, "unknown mesh extension '" + ext + "', expected " + kOutputFormats);
+  check_output_path(path);
 }
 
-void write_mesh(const std::string& path, const TriangleMesh& mesh) {
+void write_mesh(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options) {
   check_mesh_output(path);
   const std::string ext = lower_extension(path);
-  const bool openmesh = ext != ".vtp";
   check_consistent(path, mesh);
+  if (mesh.triangles.empty()) throw InputError(path, "cannot write: the mesh has no triangles");
+  if (is_gltf_path(path)) {
+    GltfOptions gltf;
+    gltf.quantize = options.quantize;
+    gltf.generator = options.generator;
+    write_gltf(path, mesh, gltf);
+    return;
+  }
   write_atomically(path, [&](const std::string& tmp) {
-    if (openmesh)
-      write_with_openmesh(tmp, path, ext, mesh);
-    else
+    if (ext == ".vtp")
       write_vtp(tmp, path, mesh);
+    else if (ext == ".obj")
+      write_obj(tmp, path, mesh);
+    else
+      write_with_openmesh(tmp, path, ext, mesh);
   });
 }
 

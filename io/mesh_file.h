@@ -1,8 +1,8 @@
-// Triangle meshes on disk: the pipeline's input models (seed 003 §6.3 reads
-// Cyberware PLY meshes) and its outputs. PLY, OFF and STL are read, and PLY,
-// OBJ, OFF and STL written, by OpenMesh; .vtp goes through VTK; OBJ is read by
-// a small parser here (Debian's OpenMesh asserts, i.e. aborts, on some broken
-// OBJ faces). The OpenMesh adapters copy straight between files and the plain
+// Triangle meshes on disk: the pipeline's input models and its outputs. PLY,
+// OFF and STL are read, and PLY, OFF and STL written, by OpenMesh; .vtp goes
+// through VTK; glTF is written by tinygltf (io/gltf_file.h); OBJ is read by a
+// small parser here (Debian's OpenMesh asserts, i.e. aborts, on some broken
+// OBJ faces) and written by io/obj_writer.h (OpenMesh's drops vertex colours). The OpenMesh adapters copy straight between files and the plain
 // TriangleMesh, never through a half-edge mesh, so non-manifold faces
 // (marching-cubes and LOD output can have them) are neither dropped nor split.
 #pragma once
@@ -34,20 +34,28 @@ TriangleMesh read_mesh(const std::string& path);
 
 // Writes `mesh` to `path` in the format its extension names:
 //   .ply  binary little-endian, with vertex normals and colours when present
-//   .obj  ASCII, with `vn` normals when present (9 significant digits)
+//   .obj  ASCII, with `vn` normals and `v x y z r g b` colours when present
+//         (9 significant digits)
 //   .off  ASCII (NOFF/COFF when normals/colours are present)
 //   .stl  binary (normals and colours are not stored)
 //   .vtp  VTK XML poly data, raw appended binary (uncompressed), with
 //         "Normals" and an unsigned-char "RGB" array when present
+//   .glb  glTF 2.0 binary, .gltf glTF 2.0 JSON with the buffer embedded:
+//         normals and colours when present; quantized unless options say not
 // `mesh` must be consistent: every triangle index < positions.size(), and
 // normals/colors empty or one per vertex. Output goes through a temporary file
 // renamed into place (write_atomically), so a failure leaves nothing behind.
 // Throws InputError for an unknown extension (listing the supported ones), an
-// inconsistent mesh, or a write failure (e.g. a missing directory).
-void write_mesh(const std::string& path, const TriangleMesh& mesh);
+// inconsistent or empty mesh, or a write failure (e.g. a missing directory).
+struct MeshWriteOptions {
+  bool quantize = true;   // glTF: KHR_mesh_quantization
+  std::string generator;  // glTF: asset.generator
+};
+void write_mesh(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options = {});
 
 // Throws InputError unless write_mesh could write `path`: a known extension in
-// an existing folder. Commands call it before long work, not after.
+// an existing folder, and not a folder itself. Commands call it before long
+// work, not after.
 void check_mesh_output(const std::string& path);
 
 }  // namespace scan2lod

@@ -1,5 +1,6 @@
 #include "lod/lod_model.h"
 
+#include "core/compact_mesh.h"
 #include "core/error.h"
 #include "lod/extract.h"
 
@@ -209,24 +210,10 @@ const LevelCut& LevelExtractor::extract(const LevelRequest& request) {
 }
 
 TriangleMesh compact_level(const LodModel& model, const std::vector<Triangle>& triangles) {
+  std::vector<Triangle> out = triangles;
   const VertexArray& v = model.vertices;
-  TriangleMesh mesh;
-  std::vector<std::int32_t> remap(v.size(), -1);
-  mesh.triangles.reserve(triangles.size());
-  for (const Triangle& t : triangles) {
-    Triangle out;
-    for (int k = 0; k < 3; ++k) {
-      std::int32_t& r = remap[std::size_t(t[std::size_t(k)])];
-      if (r < 0) {
-        r = std::int32_t(mesh.positions.size());
-        mesh.positions.push_back(v.positions[std::size_t(t[std::size_t(k)])]);
-        if (!v.normals.empty()) mesh.normals.push_back(v.normals[std::size_t(t[std::size_t(k)])]);
-        if (!v.colors.empty()) mesh.colors.push_back(v.colors[std::size_t(t[std::size_t(k)])]);
-      }
-      out[std::size_t(k)] = r;
-    }
-    mesh.triangles.push_back(out);
-  }
+  TriangleMesh mesh = compact_mesh(v.positions, v.normals, v.colors, {&out});
+  mesh.triangles = std::move(out);
   return mesh;
 }
 

@@ -3,7 +3,7 @@
 #   scripts/build.sh demo   install what is missing, build, reconstruct the bundled bunny,
 #                           build its LOD model and extract a level
 #   scripts/build.sh test   the same, then run the test suite
-#   scripts/build.sh deps   only install the packages
+#   scripts/build.sh deps   only install the packages (and the npm glTF validator)
 # BUILD_DIR (default build) and JOBS (default nproc) can be set in the environment.
 set -euo pipefail
 
@@ -18,7 +18,7 @@ packages=(
   libeigen3-dev liblz4-dev
   libpcl-dev libopen3d-dev libopenmesh-dev libflann-dev libvtk9-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
-  libmeshoptimizer-dev libmetis-dev
+  libmeshoptimizer-dev libmetis-dev libtinygltf-dev
   xvfb xauth libgl1-mesa-dri
 )
 
@@ -39,6 +39,22 @@ install_deps() {
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
+# The Khronos glTF-Validator (npm gltf-validator), which the tests run on every
+# glTF file scan2lod writes; into the build folder, version pinned in
+# tests/gltf/package.json. Node.js comes from Debian if the machine has none.
+install_validator() {
+  if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
+    local sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null
+  fi
+  local prefix="$build_dir/npm"
+  [ -f "$prefix/node_modules/gltf-validator/package.json" ] && return
+  mkdir -p "$prefix"
+  cp tests/gltf/package.json "$prefix/"
+  npm install --prefix "$prefix" --no-audit --no-fund --silent >/dev/null
+}
+
 build() {
   cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >/dev/null
   cmake --build "$build_dir" -j "$jobs"
@@ -57,6 +73,8 @@ demo() {
   "$build_dir/bin/scan2lod" info out/bunny.mco
   "$build_dir/bin/scan2lod" extract out/bunny.mco --triangles 20000 -o out/bunny_20k.ply
   "$build_dir/bin/scan2lod" extract out/bunny.mco --structure octree --percent 20 -o out/bunny_20.ply
+  # Delivery: four levels in one glTF file (MSFT_lod over shared vertices).
+  "$build_dir/bin/scan2lod" export out/bunny.mco --levels 100,25,5,1 -o out/bunny.glb
 }
 
 run_tests() {
@@ -67,8 +85,8 @@ run_tests() {
 }
 
 case "${1:-demo}" in
-  deps) install_deps ;;
+  deps) install_deps; install_validator ;;
   demo) install_deps; build; demo ;;
-  test) install_deps; build; demo; run_tests ;;
+  test) install_deps; install_validator; build; demo; run_tests ;;
   *) echo "usage: scripts/build.sh [demo|test|deps]" >&2; exit 2 ;;
 esac

@@ -35,7 +35,7 @@ std::size_t files_in(const fs::path& dir) {
 
 TEST(LodCli, BuildPrintsAOneLineSummary) {
   const fs::path model = scratch() / "summary.mco";
-  const CliRun r = run_cli("build " + kScans + " -o " + model.string() + " -r 32 --quiet");
+  const CliRun r = run_cli("build " + kScans + " -o " + model.string() + " -r 32");
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* word : {"358808 points", "nodes", "expansions", "triangles at 100%", "reconstruct", "octree",
                            "clusters"})
@@ -109,10 +109,14 @@ TEST(LodCli, InfoAndExtractAgreeOnTheBunny) {
   const nlohmann::json tj = nlohmann::json::parse(t.output);
   EXPECT_LE(tj.at("triangles").get<std::size_t>(), budget);
   EXPECT_GE(tj.at("priority").get<std::size_t>(), lods[4].at("priority").get<std::size_t>());
-  const CliRun p = run_cli("extract " + model.string() + " --priority 0 -o " + (scratch() / "root.off").string() + " --json",
+  // The root's level is empty here (an error, not an empty file); one expansion is not.
+  const CliRun root = run_cli("extract " + model.string() + " --priority 0 -o " + (scratch() / "root.off").string());
+  EXPECT_NE(root.status, 0);
+  EXPECT_NE(root.output.find("has no triangles"), std::string::npos) << root.output;
+  const CliRun p = run_cli("extract " + model.string() + " --priority 1 -o " + (scratch() / "root.off").string() + " --json",
                        false);
   ASSERT_EQ(p.status, 0) << p.output;
-  EXPECT_EQ(nlohmann::json::parse(p.output).at("priority").get<std::size_t>(), 0u);
+  EXPECT_EQ(nlohmann::json::parse(p.output).at("priority").get<std::size_t>(), 1u);
   EXPECT_LT(nlohmann::json::parse(p.output).at("triangles").get<std::size_t>(), 20u);
 
   // Without --json: a one-line summary and a table.

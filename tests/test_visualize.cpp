@@ -180,7 +180,7 @@ TEST(VisualizeRender, MontagePanelsShowTheBunnyAndItsLevels) {
   if (!have_display()) GTEST_SKIP() << "no X display; scripts/build.sh test runs the tests under xvfb-run";
   const fs::path out = scratch() / "montage.png";
   const CliRun r = run_cli("render " + bunny_model().string() + " --percent 100,20,60,60 --size 200x200 --mode both -o " +
-                       out.string() + " -q");
+                       out.string());
   ASSERT_EQ(r.status, 0) << r.output;
   const Picture pic = read_png(out);
   ASSERT_EQ(pic.width, 400);
@@ -237,7 +237,13 @@ TEST(VisualizeRender, SingleModePutsLevelsSideBySide) {
   const Picture pic = read_png(out);
   EXPECT_EQ(pic.width, 300);
   EXPECT_EQ(pic.height, 150);
-  EXPECT_GT(fraction(pic, {0, 0, 150, 127}, dark), fraction(pic, {150, 0, 150, 127}, dark));
+  // Both levels show the object; the sparser one's edges are black
+  // ink (the full level's are drawn lit at this size: see the test below).
+  const double full = fraction(pic, {0, 0, 150, 127}, not_background);
+  const double fifth = fraction(pic, {150, 0, 150, 127}, not_background);
+  EXPECT_GT(full, 0.15);
+  EXPECT_GT(fifth, 0.4 * full);  // less: white shows between its lines
+  EXPECT_GT(fraction(pic, {150, 0, 150, 127}, dark), 0.1);
 }
 
 TEST(VisualizeRender, EitherStructureRendersAndItsTableSaysWhich) {
@@ -429,4 +435,33 @@ TEST(VisualizePlot, BadInputEndsInAClearErrorAndNoFile) {
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << " -> " << r.output;
     EXPECT_FALSE(fs::exists(out)) << c.args;
   }
+}
+
+// Wireframes stay readable however dense: at 1 px per edge and less, the
+// lines are lit grey, so the object shows shading, not a black blot.
+TEST(VisualizeRender, DenseWireframesShowShadingNotABlot) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const fs::path out = scratch() / "dense_wire.png";
+  const CliRun r = run_cli("render " + bunny_model().string() +
+                           " --percent 100 --size 90x90 --mode wireframe -o " + out.string() + " -q");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Picture pic = read_png(out);
+  const scan2lod::MontagePanel panel = [] {
+    scan2lod::MontagePanel p;
+    p.x = 0, p.y = 0, p.width = 90, p.height = 90;
+    return p;
+  }();
+  const double covered = fraction(pic, body(panel), not_background);
+  ASSERT_GT(covered, 0.15);
+  EXPECT_LT(fraction(pic, body(panel), dark) / covered, 0.3);
+  // Shading: the object's grey levels spread (a flat fill would not).
+  double sum = 0, sum2 = 0, n = 0;
+  for (int y = 0; y < 75; ++y)
+    for (int x = 0; x < 90; ++x)
+      if (not_background(pic.at(x, y))) {
+        const double v = pic.at(x, y)[0];
+        sum += v, sum2 += v * v, n += 1;
+      }
+  const double mean = sum / n;
+  EXPECT_GT(std::sqrt(sum2 / n - mean * mean), 12.0) << "grey levels of the object: mean " << mean;
 }

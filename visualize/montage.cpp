@@ -1,6 +1,7 @@
 #include "visualize/montage.h"
 
 #include "core/error.h"
+#include "core/mesh_edges.h"
 #include "core/progress.h"
 #include "visualize/levels.h"
 #include "visualize/png_output.h"
@@ -99,7 +100,10 @@ Montage render_montage(const LodModel& model, LodStructure structure, const std:
       vtkNew<vtkActor> actor;
       actor->SetMapper(mapper);
       if (panel.mode == RenderMode::wireframe) {
-        style_wireframe(actor->GetProperty());
+        const double diagonal = model_bounds(model).diagonal();
+        const double edge_pixels =
+            diagonal > 0 ? mean_edge_length(level.mesh.positions, level.mesh.triangles) / diagonal * panel.height : 8;
+        style_wireframe(actor->GetProperty(), edge_pixels);
         renderer->UseHiddenLineRemovalOn();
       } else {
         style_shaded(actor->GetProperty());

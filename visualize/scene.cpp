@@ -38,11 +38,22 @@ void style_shaded(vtkProperty* p) {
   p->LightingOn();
 }
 
-void style_wireframe(vtkProperty* p) {
+void style_wireframe(vtkProperty* p, double edge_pixels) {
   p->SetRepresentationToWireframe();
-  p->SetColor(0.08, 0.08, 0.08);
   p->SetLineWidth(1);
-  p->LightingOff();
+  if (edge_pixels >= 2) {  // every edge visible: black ink
+    p->SetColor(0.08, 0.08, 0.08);
+    p->LightingOff();
+    return;
+  }
+  // Edges crowd the pixels: unlit they would merge into a flat blot, so the
+  // lines are lit like a surface and lighter the denser they are.
+  const double grey = 0.75 - 0.35 * std::clamp(edge_pixels - 1.0, 0.0, 1.0);
+  p->SetColor(grey, grey, grey);
+  p->LightingOn();
+  p->SetAmbient(0.15);
+  p->SetDiffuse(0.85);
+  p->SetSpecular(0);
 }
 
 std::string thousands(std::size_t n) {

@@ -22,7 +22,10 @@ void frame_camera(vtkCamera* camera, const Aabb& box, double azimuth, double ele
 // Light ivory, Gouraud-shaded with a little specular: the shaded panels.
 void style_shaded(vtkProperty* property);
 // Thin near-black unlit lines: the wireframe panels.
-void style_wireframe(vtkProperty* property);
+// Black lines while edges span 2 pixels or more (`edge_pixels`: a level's
+// mean edge length on screen); denser, lit grey lines, so that a dense mesh
+// reads as a shaded shape instead of a black blot.
+void style_wireframe(vtkProperty* property, double edge_pixels = 8);
 
 // 429247 -> "429 247" (thin groups read better in captions).
 std::string thousands(std::size_t n);

@@ -1,0 +1,166 @@
+// scan2lod export: several levels of a .mco model in one process and one
+// model load. glTF (.glb, .gltf) holds them as one MSFT_lod chain over shared
+// vertices (io/gltf_file.h); a mesh format writes one file per level.
+#include "cli/commands.h"
+#include "cli/outputs.h"
+#include "cli/terminal.h"
+#include "core/error.h"
+#include "io/gltf_file.h"
+#include "io/mesh_file.h"
+#include "lod/level_chain.h"
+#include "lod/lod_model.h"
+#include "lod/model_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+namespace scan2lod::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::vector<LevelRequest> requests_from(const std::vector<double>& percents, const std::vector<long long>& budgets) {
+  std::vector<LevelRequest> requests;
+  for (double p : percents) {
+    if (!(p > 0 && p <= 100)) throw InputError("", "--levels takes percentages in (0, 100], got " + std::to_string(p));
+    requests.push_back(LevelRequest::at_percent(p));
+  }
+  for (long long t : budgets) {
+    if (t < 1) throw InputError("", "--triangles takes budgets >= 1, got " + std::to_string(t));
+    requests.push_back(LevelRequest::at_triangles(t));
+  }
+  return requests;
+}
+
+// "out/bunny.ply" and level i -> "out/bunny_LOD<i>.ply".
+std::string level_path(const std::string& output, const std::string& format, std::size_t i) {
+  const fs::path p(output);
+  return (p.parent_path() / (p.stem().string() + "_LOD" + std::to_string(i) + "." + format)).string();
+}
+
+}  // namespace
+
+void add_export_command(CLI::App& app) {
+  struct Args {
+    std::string model, output, structure, format;
+    std::vector<double> percents;
+    std::vector<long long> budgets;
+    double pixel_error = 1;
+    int height = 1080;
+    bool no_quantize = false, json = false;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* cmd = app.add_subcommand("export", "Several levels of a .mco model -> one glTF LOD chain, or a file each");
+  cmd->add_option("model", args->model, "Model written by scan2lod build (.mco)")->required();
+  cmd->add_option("-o,--output", args->output,
+                  "Output: .glb or .gltf (one file, MSFT_lod chain), or a mesh name whose folder and stem name "
+                  "one file per level (bunny.ply -> bunny_LOD0.ply, ...)")
+      ->required();
+  cmd->add_option("--structure", args->structure, "clusters or octree (default: clusters when the model has them)")
+      ->check(CLI::IsMember({"clusters", "octree"}, CLI::ignore_case));
+  CLI::Option* levels = cmd->add_option("--levels", args->percents,
+                                        "Levels as percentages, e.g. 100,25,5,1 (the default)")
+                            ->delimiter(',');
+  CLI::Option* budgets = cmd->add_option("--triangles", args->budgets,
+                                         "Levels as triangle budgets, e.g. 200000,50000,10000,2000")
+                             ->delimiter(',');
+  levels->excludes(budgets);
+  cmd->add_option("--format", args->format, "glb, gltf, ply, obj, off, stl or vtp (default: -o's extension)")
+      ->check(CLI::IsMember({"glb", "gltf", "ply", "obj", "off", "stl", "vtp"}, CLI::ignore_case));
+  cmd->add_flag("--no-quantize", args->no_quantize, "glTF: 32-bit float positions and normals");
+  cmd->add_option("--pixel-error", args->pixel_error,
+                  "glTF screen coverage: a level is drawn while its error spans at most this many pixels")
+      ->default_val(1);
+  cmd->add_option("--height", args->height, "glTF screen coverage: screen height in pixels")->default_val(1080);
+  cmd->add_flag("--json", args->json, "Print the levels, files and timings as JSON");
+  cmd->callback([args] {
+    if (args->percents.empty() && args->budgets.empty()) args->percents = {100, 25, 5, 1};
+    const std::vector<LevelRequest> requests = requests_from(args->percents, args->budgets);
+    if (!(args->pixel_error > 0) || args->height < 1)
+      throw InputError("", "--pixel-error must be > 0 and --height >= 1");
+    std::string format = args->format;
+    if (format.empty()) format = extension_of(args->output);
+    std::transform(format.begin(), format.end(), format.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    const bool gltf = format == "glb" || format == "gltf";
+    std::vector<std::string> outputs;
+    if (gltf) {
+      outputs.push_back(args->output);
+      if (extension_of(args->output) != format)
+        throw InputError(args->output, "--format " + format + " needs an output ending in ." + format);
+    } else {
+      for (std::size_t i = 0; i < requests.size(); ++i) outputs.push_back(level_path(args->output, format, i));
+    }
+    for (const std::string& out : outputs) {
+      check_mesh_output(out);
+      refuse_overwriting_inputs(out, {args->model});
+    }
+
+    auto start = std::chrono::steady_clock::now();
+    const LodModel model = load_model(args->model);
+    const double load_seconds = seconds_since(start);
+    start = std::chrono::steady_clock::now();
+    const LodStructure structure = structure_named(model, args->structure, args->model);
+    ChainOptions options;
+    options.pixel_error = args->pixel_error;
+    options.screen_height = args->height;
+    const LevelChain chain = extract_chain(model, structure, requests, args->model, options);
+    const double extract_seconds = seconds_since(start);
+
+    start = std::chrono::steady_clock::now();
+    if (gltf) {
+      std::vector<GltfLevel> levels;
+      for (const ChainLevel& l : chain.levels) levels.push_back({&l.cut.triangles, l.name, l.screen_coverage});
+      GltfOptions g;
+      g.quantize = !args->no_quantize;
+      g.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
+      write_gltf_chain(args->output, chain.vertices, levels, g);
+    } else {
+      for (std::size_t i = 0; i < chain.levels.size(); ++i) write_mesh(outputs[i], level_mesh(chain, i));
+    }
+    const double write_seconds = seconds_since(start);
+
+    nlohmann::ordered_json j = {{"structure", structure_name(structure)}, {"format", format}};
+    j["levels"] = nlohmann::ordered_json::array();
+    for (std::size_t i = 0; i < chain.levels.size(); ++i) {
+      const ChainLevel& l = chain.levels[i];
+      nlohmann::ordered_json level = {{"name", l.name},
+                                      {"triangles", l.cut.triangles.size()},
+                                      {"percent", l.cut.percent},
+                                      {"error", l.error},
+                                      {"screen_coverage", l.screen_coverage}};
+      level["file"] = gltf ? args->output : outputs[i];
+      j["levels"].push_back(level);
+    }
+    std::uintmax_t bytes = 0;
+    for (const std::string& out : outputs) {
+      std::error_code ec;
+      const std::uintmax_t size = fs::file_size(out, ec);
+      if (!ec) bytes += size;
+    }
+    j["vertices"] = chain.vertices.positions.size();
+    j["bytes"] = bytes;
+    j["seconds"] = {{"load", load_seconds}, {"extract", extract_seconds}, {"write", write_seconds}};
+    if (args->json) {
+      std::printf("%s\n", j.dump(2).c_str());
+      return;
+    }
+    for (const ChainLevel& l : chain.levels)
+      say("%s: %zu triangles (%.1f %%), error %.3g, drawn from %.3g of the screen\n", l.name.c_str(),
+          l.cut.triangles.size(), l.cut.percent, l.error, l.screen_coverage);
+    say("%zu levels of the %s, %zu vertices, %.1f MB; load %.2f s, extract %.3f s, write %.2f s -> %s\n",
+        chain.levels.size(), structure_name(structure), chain.vertices.positions.size(), double(bytes) / 1e6,
+        load_seconds, extract_seconds, write_seconds, gltf ? args->output.c_str() : fs::path(outputs[0]).parent_path().c_str());
+  });
+}
+
+}  // namespace scan2lod::cli

@@ -1,0 +1,83 @@
+#include "lod/level_chain.h"
+
+#include "core/compact_mesh.h"
+#include "core/error.h"
+#include "core/mesh_edges.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace scan2lod {
+namespace {
+
+std::string describe(const LevelRequest& r) {
+  switch (r.kind) {
+    case LevelRequest::Kind::kPercent: return "the level at " + std::to_string(r.percent) + " %";
+    case LevelRequest::Kind::kTriangles: return "the level at " + std::to_string(r.triangles) + " triangles";
+    case LevelRequest::Kind::kError: return "the level at error " + std::to_string(r.error);
+    case LevelRequest::Kind::kCamera: return "the camera's level";
+    case LevelRequest::Kind::kPriority: return "the level at priority " + std::to_string(r.priority);
+  }
+  return "a level";
+}
+
+}  // namespace
+
+LevelChain extract_chain(const LodModel& model, LodStructure structure, const std::vector<LevelRequest>& requests,
+                         const std::string& source, const ChainOptions& options) {
+  LevelExtractor extractor(model, structure);
+  LevelChain chain;
+  chain.structure = structure;
+  for (const LevelRequest& request : requests) {
+    ChainLevel level;
+    try {
+      level.cut = extractor.extract(request);
+    } catch (const InputError& e) {
+      throw InputError(source, e.what());
+    }
+    const bool over = request.kind == LevelRequest::Kind::kTriangles &&
+                      std::int64_t(level.cut.triangles.size()) > request.triangles;
+    if (level.cut.triangles.empty() || over)
+      throw InputError(source, over ? "no level has at most " + std::to_string(request.triangles) +
+                                          " triangles; the coarsest level offered has " +
+                                          std::to_string(extractor.coarsest_triangles())
+                                    : describe(request) + " has no triangles; ask for a finer one");
+    level.error = structure == LodStructure::kClusters ? level.cut.error
+                                                        : 0.25 * mean_edge_length(model.vertices.positions,
+                                                                                  level.cut.triangles);
+    chain.levels.push_back(std::move(level));
+  }
+  std::stable_sort(chain.levels.begin(), chain.levels.end(), [](const ChainLevel& a, const ChainLevel& b) {
+    return a.cut.triangles.size() > b.cut.triangles.size();
+  });
+  // Errors must not shrink down the chain for the coverages to make sense.
+  for (std::size_t i = 1; i < chain.levels.size(); ++i)
+    chain.levels[i].error = std::max(chain.levels[i].error, chain.levels[i - 1].error);
+
+  const double diagonal = model_bounds(model).diagonal();
+  const std::size_t n = chain.levels.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    ChainLevel& level = chain.levels[i];
+    level.name = "LOD" + std::to_string(i);
+    if (i + 1 == n) break;  // the coarsest is drawn however small
+    // Level i gives way to level i + 1 where i + 1 becomes good enough.
+    const double next = chain.levels[i + 1].error;
+    const double across = next > 0 ? options.pixel_error * diagonal / next / options.screen_height : 1e9;
+    level.screen_coverage = std::min(1.0, across * across);
+  }
+  std::vector<std::vector<Triangle>*> lists;
+  for (ChainLevel& level : chain.levels) lists.push_back(&level.cut.triangles);
+  const VertexArray& v = model.vertices;
+  chain.vertices = compact_mesh(v.positions, v.normals, v.colors, lists);
+  return chain;
+}
+
+TriangleMesh level_mesh(const LevelChain& chain, std::size_t i) {
+  std::vector<Triangle> triangles = chain.levels.at(i).cut.triangles;
+  const TriangleMesh& v = chain.vertices;
+  TriangleMesh mesh = compact_mesh(v.positions, v.normals, v.colors, {&triangles});
+  mesh.triangles = std::move(triangles);
+  return mesh;
+}
+
+}  // namespace scan2lod
