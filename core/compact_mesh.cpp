@@ -4,20 +4,28 @@ namespace scan2lod {
 
 TriangleMesh compact_mesh(const std::vector<Vec3f>& positions, const std::vector<Vec3f>& normals,
                           const std::vector<Rgb>& colors, const std::vector<std::vector<Triangle>*>& lists) {
+  // Number the used vertices first, so that each output array is allocated
+  // once at its final size (growing them would copy and fault in pages).
   std::vector<std::int32_t> remap(positions.size(), -1);
-  TriangleMesh out;
+  std::int32_t used = 0;
   for (std::vector<Triangle>* list : lists)
     for (Triangle& t : *list)
       for (std::int32_t& i : t) {
         std::int32_t& r = remap[std::size_t(i)];
-        if (r < 0) {
-          r = std::int32_t(out.positions.size());
-          out.positions.push_back(positions[std::size_t(i)]);
-          if (!normals.empty()) out.normals.push_back(normals[std::size_t(i)]);
-          if (!colors.empty()) out.colors.push_back(colors[std::size_t(i)]);
-        }
+        if (r < 0) r = used++;
         i = r;
       }
+  TriangleMesh out;
+  out.positions.resize(std::size_t(used));
+  if (!normals.empty()) out.normals.resize(std::size_t(used));
+  if (!colors.empty()) out.colors.resize(std::size_t(used));
+  for (std::size_t v = 0; v < remap.size(); ++v) {
+    const std::int32_t r = remap[v];
+    if (r < 0) continue;
+    out.positions[std::size_t(r)] = positions[v];
+    if (!normals.empty()) out.normals[std::size_t(r)] = normals[v];
+    if (!colors.empty()) out.colors[std::size_t(r)] = colors[v];
+  }
   return out;
 }
 

@@ -15,7 +15,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 namespace scan2lod {
 namespace {
@@ -33,6 +32,10 @@ std::string lower_extension(const std::string& path) {
 class BufferBuilder {
  public:
   explicit BufferBuilder(tinygltf::Model* model) : model_(model) {}
+
+  // One allocation for the whole buffer: growing it view by view would copy
+  // and fault in its pages again at every doubling.
+  void reserve(std::size_t bytes) { buffer().reserve(bytes); }
 
   int add_view(const void* data, std::size_t size, std::size_t stride, int target) {
     std::vector<unsigned char>& bytes = buffer();
@@ -199,6 +202,9 @@ tinygltf::Model build_model(const TriangleMesh& vertices, const std::vector<Gltf
   model.asset.version = "2.0";
   model.asset.generator = options.generator.empty() ? "scan2lod" : options.generator;
   BufferBuilder b(&model);
+  std::size_t bytes = vertices.positions.size() * 32 + 64;  // the widest attributes, padded
+  for (const GltfLevel& level : levels) bytes += level.triangles->size() * 12 + 4;
+  b.reserve(bytes);
   const Quantization q = quantization_for(vertices.positions);
   VertexAccessors va;
   va.position = add_positions(b, vertices.positions, options, q);
@@ -267,16 +273,15 @@ void write_gltf_chain(const std::string& path, const TriangleMesh& vertices, con
   if (!is_gltf_path(path)) throw InputError(path, "expected a .glb or .gltf file name");
   check_chain(path, vertices, levels);
   const bool binary = lower_extension(path) == ".glb";
-  tinygltf::Model model = build_model(vertices, levels, options);
-  std::ostringstream bytes;
-  tinygltf::TinyGLTF writer;
-  if (!writer.WriteGltfSceneToStream(&model, bytes, !binary, binary))
-    throw InputError(path, "tinygltf could not serialise the model");
-  const std::string data = std::move(bytes).str();
+  const tinygltf::Model model = build_model(vertices, levels, options);
   write_atomically(path, [&](const std::string& tmp) {
+    // Straight into the file: a string in between would copy the buffer
+    // twice more and fault in its pages.
     std::ofstream out(tmp, std::ios::binary);
     if (!out) throw InputError(path, "cannot create the file (does the folder exist?)");
-    out.write(data.data(), std::streamsize(data.size()));
+    tinygltf::TinyGLTF writer;
+    if (!writer.WriteGltfSceneToStream(&model, out, !binary, binary))
+      throw InputError(path, "tinygltf could not serialise the model");
     out.close();
     if (out.fail()) throw InputError(path, "writing glTF failed (disk full?)");
   });
