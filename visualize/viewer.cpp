@@ -3,6 +3,7 @@
 #include "acquisition/lattice_normals.h"
 #include "acquisition/scan_set.h"
 #include "core/error.h"
+#include "core/mesh_edges.h"
 #include "io/mesh_file.h"
 #include "lod/model_file.h"
 #include "visualize/levels.h"
@@ -197,6 +198,7 @@ struct Viewer::Impl {
   vtkNew<vtkCallbackCommand> slider_moved;
   bool rendering_after_change = false;
   vtkSmartPointer<vtkPolyData> level_poly;  // a model: all vertices, the level's triangles
+  double edge_pixels = 8;                    // the level's mean edge length on screen, about
   std::vector<std::uint8_t> vertex_used;
   std::size_t level_vertices = 0;
   bool shown_uniform = false;  // the level shown is a slider's (not a camera's) cut
@@ -541,6 +543,14 @@ void Viewer::Impl::show_cut(const LevelCut& cut) {
   for (const Triangle& t : triangles)
     for (std::int32_t v : t) vertex_used[std::size_t(v)] = 0;
   level_vertices = used;
+  // How long edges are on screen (a sample of them is enough): dense
+  // wireframes are drawn lit and grey instead of black (style_wireframe).
+  std::vector<Triangle> sample;
+  const std::size_t stride = std::max<std::size_t>(1, triangles.size() / 4096);
+  for (std::size_t i = 0; i < triangles.size(); i += stride) sample.push_back(triangles[i]);
+  const double diagonal = box.diagonal();
+  edge_pixels = diagonal > 0 ? mean_edge_length(input.model->vertices.positions, sample) / diagonal * options.height : 8;
+  if (state.mode == DrawMode::wireframe) apply_mode();
   state.convert_ms = ms_since(start);
   state.extract_ms = cut.extract_seconds * 1e3;
   state.priority = cut.priority;
@@ -626,7 +636,7 @@ void Viewer::Impl::apply_mode() {
   compare_mapper->ScalarVisibilityOff();
   switch (state.mode) {
     case DrawMode::shaded: break;
-    case DrawMode::wireframe: style_wireframe(p); break;
+    case DrawMode::wireframe: style_wireframe(p, edge_pixels); break;
     case DrawMode::shaded_edges: p->EdgeVisibilityOn(); break;
     case DrawMode::points: p->SetRepresentationToPoints(); break;
     case DrawMode::vertex_colors:
