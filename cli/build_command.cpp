@@ -41,7 +41,7 @@ void add_build_command(CLI::App& app) {
   add_reconstruct_flags(cmd, &args->flags);
   cmd->add_option("--metric", args->metric,
                   "What orders the expansions: deviation (from the leaf surface, per triangle) or "
-                  "area (the seed's area difference)")
+                  "area (Lee's area difference)")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, LodMetric>{{"deviation", LodMetric::kDeviation}, {"area", LodMetric::kAreaDifference}},
           CLI::ignore_case))

@@ -1,5 +1,5 @@
 // scan2lod plot: the LOD graphs of a .mco model as VTK charts in one PNG (the
-// octree's: seed 003 Figs. 6.6-6.8; the cluster hierarchy's: error, clusters
+// octree's: Lee 2007, Figs. 6.6-6.8; the cluster hierarchy's: error, clusters
 // and vertices against triangles), plus error against triangles given a
 // reference mesh.
 #include "cli/commands.h"

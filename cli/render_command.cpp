@@ -1,6 +1,6 @@
 // scan2lod render: levels of a .mco model (of its cluster hierarchy or its
 // octree, --structure) off-screen into one PNG montage, the layout of the
-// seed's Fig. 6.3 (wireframe beside shaded, one row per level).
+// Lee 2007's Fig. 6.3 (wireframe beside shaded, one row per level).
 #include "cli/commands.h"
 #include "cli/terminal.h"
 #include "core/error.h"

@@ -1,4 +1,4 @@
-// `scan2lod scan MESH -o DIR`: virtual range scans of a mesh (seed 003 §4.4),
+// `scan2lod scan MESH -o DIR`: virtual range scans of a mesh (Lee 2007, §4.4),
 // written as a Stanford-style scan set that `reconstruct` reads back.
 #include "acquisition/virtual_scanner.h"
 #include "cli/commands.h"

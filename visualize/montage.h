@@ -1,4 +1,4 @@
-// Off-screen montage of levels of detail, laid out like the seed's Figs.
+// Off-screen montage of levels of detail, laid out like Lee 2007's Figs.
 // 6.3-6.5: one row per level, wireframe beside shaded (or one mode, levels side
 // by side), every panel through the same camera and captioned with its LOD %,
 // triangles and vertices.

@@ -1,5 +1,5 @@
 // The LOD graphs as VTK charts (vtkChartXY) in one PNG. For the octree, the
-// seed's §6.3: the LOD metric against the priority number (Fig. 6.6) and its
+// Lee 2007, §6.3: the LOD metric against the priority number (Fig. 6.6) and its
 // first 300 priorities (Fig. 6.7), the accumulated triangle count against the
 // priority number (Fig. 6.8). For the cluster hierarchy: the uniform cut's
 // error threshold, clusters drawn and vertices used against its triangles.
