@@ -25,7 +25,7 @@ std::size_t chunk_begin(std::size_t total, int c) { return total * std::size_t(c
 // Starts loading the neighbours transition_of reads.
 void prefetch_neighbours(const McOctree& tree, std::size_t node) {
   if (node >= tree.internal_nodes()) return;
-  const auto* around = tree.neighbours[node].data();
+  const auto* around = tree.transitions.neighbours[node].data();
   __builtin_prefetch(around);
   __builtin_prefetch(around + 26);
 }
@@ -36,7 +36,7 @@ bool transition_of(const McOctree& tree, std::int32_t node, const std::vector<st
                    TransitionInput* in) {
   if (std::size_t(node) >= tree.internal_nodes()) return false;
   // A node beside expanded cells is triangulated against the finer nodes there.
-  const auto& around = tree.neighbours[node];
+  const auto& around = tree.transitions.neighbours[node];
   std::uint32_t splits = 0;
   // Branch-free: whether a cell is empty or expanded is as good as random.
   const std::uint8_t* flags = expanded.data();
@@ -49,8 +49,8 @@ bool transition_of(const McOctree& tree, std::int32_t node, const std::vector<st
   if (!splits) return false;
   const std::uint16_t edges = std::uint16_t(splits & 0xfff);
   const std::uint8_t faces = std::uint8_t(splits >> 12);
-  *in = TransitionInput{tree.boundary_inside[node], tree.edge_vertices[node].data(),
-                        tree.sub_edge_vertices[node].data(), tree.centre_vertices[node], faces, edges};
+  *in = TransitionInput{tree.transitions.boundary_inside[node], tree.nodes.edge_vertices[node].data(),
+                        tree.transitions.sub_edge_vertices[node].data(), tree.transitions.centre_vertices[node], faces, edges};
   return true;
 }
 
@@ -117,15 +117,15 @@ void emit_range(const McOctree& tree, const std::vector<std::uint8_t>& marks, st
       }
       continue;
     }
-    const std::int32_t first = tree.first_triangle[node];
-    if (blocks) blocks->push_back({std::int32_t(node), tree.triangle_counts[node]});
+    const std::int32_t first = tree.nodes.first_triangle[node];
+    if (blocks) blocks->push_back({std::int32_t(node), tree.nodes.triangle_counts[node]});
     Pending* last = in_run ? &queue[(tail - 1) % kAhead] : nullptr;
     if (!last || last->run_end != first) {
       last = &push();
       last->run_begin = first;
       in_run = true;
     }
-    last->run_end = first + tree.triangle_counts[node];
+    last->run_end = first + tree.nodes.triangle_counts[node];
   }
   while (head != tail) emit_front();
 }
@@ -142,7 +142,7 @@ void mark_children(const McOctree& tree, const LodArray& lod, std::size_t begin,
                    std::uint8_t* flags) {
   for (std::size_t i = begin; i < end; ++i) {
     const std::int32_t node = lod.order[i];
-    for (std::int32_t c = tree.first_child[node], end_child = c + tree.child_counts[node]; c < end_child; ++c)
+    for (std::int32_t c = tree.nodes.first_child[node], end_child = c + tree.nodes.child_counts[node]; c < end_child; ++c)
       if (!(flags[c] & kExpanded)) flags[c] = kCut;
   }
 }
@@ -159,18 +159,18 @@ void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::u
                std::vector<Triangle>* triangles) {
   TransitionInput in;
   if (transition_of(tree, node, expanded, &in)) return triangulate_transition(in, triangles);
-  const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
-  triangles->insert(triangles->end(), first, first + tree.triangle_counts[node]);
+  const Triangle* first = tree.triangles.data() + tree.nodes.first_triangle[node];
+  triangles->insert(triangles->end(), first, first + tree.nodes.triangle_counts[node]);
 }
 
 void prefetch_node(const McOctree& tree, std::int32_t node) {
   const std::size_t n = std::size_t(node);
-  __builtin_prefetch(&tree.first_triangle[n]);
+  __builtin_prefetch(&tree.nodes.first_triangle[n]);
   if (n >= tree.internal_nodes()) return;
   prefetch_neighbours(tree, n);
-  prefetch_crossings(tree.sub_edge_vertices[n].data(), tree.edge_vertices[n].data());
-  __builtin_prefetch(&tree.boundary_inside[n]);
-  __builtin_prefetch(&tree.centre_vertices[n]);
+  prefetch_crossings(tree.transitions.sub_edge_vertices[n].data(), tree.nodes.edge_vertices[n].data());
+  __builtin_prefetch(&tree.transitions.boundary_inside[n]);
+  __builtin_prefetch(&tree.transitions.centre_vertices[n]);
 }
 
 void node_triangle_counts(const McOctree& tree, const std::int32_t* nodes, int size,
@@ -186,7 +186,7 @@ void node_triangle_counts(const McOctree& tree, const std::int32_t* nodes, int s
       if ((transition[i] = transition_of(tree, batch[i], expanded, &inputs[i]))) prefetch_transition(inputs[i]);
     for (int i = 0; i < n; ++i)
       counts[first + i] =
-          transition[i] ? transition_triangle_count(inputs[i]) : tree.triangle_counts[std::size_t(batch[i])];
+          transition[i] ? transition_triangle_count(inputs[i]) : tree.nodes.triangle_counts[std::size_t(batch[i])];
   }
 }
 
@@ -211,11 +211,11 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
   auto append_patches = [&] {
     for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
       bool shown = true;
-      for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1] && shown; ++k)
-        shown = flags[tree.patch_needs[k]] & kExpanded;
+      for (std::int32_t k = tree.patches.needs_first[g]; k < tree.patches.needs_first[g + 1] && shown; ++k)
+        shown = flags[tree.patches.needs[k]] & kExpanded;
       if (shown)
-        triangles->insert(triangles->end(), tree.patch_triangles.begin() + tree.patch_group_first[g],
-                          tree.patch_triangles.begin() + tree.patch_group_first[g + 1]);
+        triangles->insert(triangles->end(), tree.patches.triangles.begin() + tree.patches.group_first[g],
+                          tree.patches.triangles.begin() + tree.patches.group_first[g + 1]);
     }
   };
   // The cut in node order rather than LOD order: neighbouring nodes' data sit
@@ -281,7 +281,7 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
 
 TriangleMesh compact_lod(const McOctree& tree, const std::vector<Triangle>& triangles) {
   TriangleMesh mesh;
-  std::vector<std::int32_t> remap(tree.positions.size(), -1);
+  std::vector<std::int32_t> remap(tree.vertices.positions.size(), -1);
   mesh.triangles.reserve(triangles.size());
   for (const Triangle& t : triangles) {
     Triangle out;
@@ -289,9 +289,9 @@ TriangleMesh compact_lod(const McOctree& tree, const std::vector<Triangle>& tria
       std::int32_t& r = remap[t[k]];
       if (r < 0) {
         r = std::int32_t(mesh.positions.size());
-        mesh.positions.push_back(tree.positions[t[k]]);
-        if (!tree.normals.empty()) mesh.normals.push_back(tree.normals[t[k]]);
-        if (!tree.colors.empty()) mesh.colors.push_back(tree.colors[t[k]]);
+        mesh.positions.push_back(tree.vertices.positions[t[k]]);
+        if (!tree.vertices.normals.empty()) mesh.normals.push_back(tree.vertices.normals[t[k]]);
+        if (!tree.vertices.colors.empty()) mesh.colors.push_back(tree.vertices.colors[t[k]]);
       }
       out[k] = r;
     }

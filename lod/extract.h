@@ -10,7 +10,7 @@
 
 namespace scan2lod {
 
-// Triangles (indices into tree.positions) of the mesh after `priority`
+// Triangles (indices into tree.vertices.positions) of the mesh after `priority`
 // expansions (0: the root's, lod.full(): the full marching-cubes mesh).
 // `expanded` is scratch space of tree.size() flags, left all-zero on return.
 void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,

@@ -22,12 +22,12 @@ template <class Dependencies>
 std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies& dependencies) {
   const std::size_t n = tree.size();
   auto leaf_triangles = [&](std::size_t node) {
-    const Triangle* first = tree.triangles.data() + tree.first_triangle[node];
-    return std::make_pair(first, first + tree.triangle_counts[node]);
+    const Triangle* first = tree.triangles.data() + tree.nodes.first_triangle[node];
+    return std::make_pair(first, first + tree.nodes.triangle_counts[node]);
   };
   // The full mesh: leaf triangles, then the patches.
   std::vector<Triangle> full;
-  full.reserve(tree.triangles.size() + tree.patch_triangles.size());
+  full.reserve(tree.triangles.size() + tree.patches.triangles.size());
   std::vector<std::int32_t> first_of_leaf(n, -1);
   for (std::size_t node = 0; node < n; ++node)
     if (tree.is_leaf(node)) {
@@ -35,12 +35,12 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
       auto [t, end] = leaf_triangles(node);
       full.insert(full.end(), t, end);
     }
-  full.insert(full.end(), tree.patch_triangles.begin(), tree.patch_triangles.end());
-  const MeshEdges edges = mesh_edges(full, tree.positions.size());
+  full.insert(full.end(), tree.patches.triangles.begin(), tree.patches.triangles.end());
+  const MeshEdges edges = mesh_edges(full, tree.vertices.positions.size());
 
   std::vector<std::uint8_t> pinned(n, 0);
   auto pin = [&](std::int32_t node) {
-    for (; node >= 0 && !pinned[node]; node = tree.parents[node]) pinned[node] = 1;
+    for (; node >= 0 && !pinned[node]; node = tree.nodes.parents[node]) pinned[node] = 1;
   };
   // Leaves on the rim, and leaves whose clean-up dropped some of their
   // triangles (a speck or fin beside kept surface): they keep the signs that
@@ -49,30 +49,30 @@ std::vector<std::uint8_t> pinned_nodes(const McOctree& tree, const Dependencies&
   // triangle has.
   const auto& cases = cube_cases();
   for (std::size_t node = 0; node < n; ++node) {
-    if (!tree.is_leaf(node) || tree.parents[node] < 0) continue;
-    bool pins = tree.triangle_counts[node] < cases[tree.cases[node]].triangle_count;
-    for (std::int32_t t = 0; t < tree.triangle_counts[node] && !pins; ++t)
+    if (!tree.is_leaf(node) || tree.nodes.parents[node] < 0) continue;
+    bool pins = tree.nodes.triangle_counts[node] < cases[tree.nodes.cases[node]].triangle_count;
+    for (std::int32_t t = 0; t < tree.nodes.triangle_counts[node] && !pins; ++t)
       for (std::int32_t e : edges.of_triangle[std::size_t(first_of_leaf[node] + t)])
         pins = pins || edges.uses[std::size_t(e)] == 1;
-    if (pins) pin(tree.parents[node]);
+    if (pins) pin(tree.nodes.parents[node]);
   }
-  for (std::int32_t node : tree.patch_needs) pin(node);
+  for (std::int32_t node : tree.patches.needs) pin(node);
   // Nodes with a crossing at a hole patch's vertex, which could close the
   // patch's loop with a triangle of their own (an edge of three triangles on
   // a Mobius strip), or with a crossing the leaves have no vertex for
   // (mc_octree.cpp adds one), whose signs see surface the leaves do not have.
   // Both kinds of vertex, flagged; a node's crossings include its transitions'.
-  std::vector<std::uint8_t> pinning(tree.positions.size(), 0);
-  for (const Triangle& t : tree.patch_triangles)
+  std::vector<std::uint8_t> pinning(tree.vertices.positions.size(), 0);
+  for (const Triangle& t : tree.patches.triangles)
     for (const std::int32_t v : t) pinning[std::size_t(v)] = 1;
-  std::int32_t first_centre = std::int32_t(tree.positions.size());
-  for (std::int32_t c : tree.centre_vertices)
+  std::int32_t first_centre = std::int32_t(tree.vertices.positions.size());
+  for (std::int32_t c : tree.transitions.centre_vertices)
     if (c >= 0) first_centre = std::min(first_centre, c);
   for (std::int32_t v = std::int32_t(tree.mesh_vertices); v < first_centre; ++v) pinning[std::size_t(v)] = 1;
   auto pinning_vertex = [&](std::int32_t v) { return v >= 0 && pinning[std::size_t(v)]; };
   for (std::size_t node = 0; node < tree.internal_nodes(); ++node)
-    if (std::any_of(tree.edge_vertices[node].begin(), tree.edge_vertices[node].end(), pinning_vertex) ||
-        std::any_of(tree.sub_edge_vertices[node].begin(), tree.sub_edge_vertices[node].end(), pinning_vertex))
+    if (std::any_of(tree.nodes.edge_vertices[node].begin(), tree.nodes.edge_vertices[node].end(), pinning_vertex) ||
+        std::any_of(tree.transitions.sub_edge_vertices[node].begin(), tree.transitions.sub_edge_vertices[node].end(), pinning_vertex))
       pin(std::int32_t(node));
   // Dependencies are coarser, so they sit at smaller indices: one pass from
   // the deepest nodes up closes the set.
@@ -119,12 +119,12 @@ void accumulate(const McOctree& tree, const LodArray& lod, std::size_t begin, st
   std::vector<std::int32_t> patch_waiting(tree.patch_groups(), 0);
   std::vector<std::vector<std::int32_t>> patches_of(n);
   for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
-    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
-      if (!(flags[tree.patch_needs[k]] & 1)) {
+    for (std::int32_t k = tree.patches.needs_first[g]; k < tree.patches.needs_first[g + 1]; ++k)
+      if (!(flags[tree.patches.needs[k]] & 1)) {
         ++patch_waiting[g];
-        patches_of[tree.patch_needs[k]].push_back(std::int32_t(g));
+        patches_of[tree.patches.needs[k]].push_back(std::int32_t(g));
       }
-    if (patch_waiting[g] == 0) triangles += tree.patch_group_first[g + 1] - tree.patch_group_first[g];
+    if (patch_waiting[g] == 0) triangles += tree.patches.group_first[g + 1] - tree.patches.group_first[g];
   }
   if (begin == 0) accumulated[0] = triangles;
   std::int32_t recount[8 + 18], batch[8 + 18];
@@ -133,11 +133,11 @@ void accumulate(const McOctree& tree, const LodArray& lod, std::size_t begin, st
     flags[node] = 1;
     triangles -= current[node];
     int size = 0;
-    for (int c = 0; c < tree.child_counts[node]; ++c) recount[size++] = tree.first_child[node] + c;
+    for (int c = 0; c < tree.nodes.child_counts[node]; ++c) recount[size++] = tree.nodes.first_child[node] + c;
     if (std::size_t(node) < tree.internal_nodes())
       for (const int c : splitting_cells())
-        if (const std::int32_t q = tree.neighbours[node][std::size_t(c)];
-            q >= 0 && !(flags[q] & 1) && (flags[tree.parents[q]] & 1))
+        if (const std::int32_t q = tree.transitions.neighbours[node][std::size_t(c)];
+            q >= 0 && !(flags[q] & 1) && (flags[tree.nodes.parents[q]] & 1))
           recount[size++] = q;
     node_triangle_counts(tree, recount, size, flags, batch);
     for (int k = 0; k < size; ++k) {
@@ -145,7 +145,7 @@ void accumulate(const McOctree& tree, const LodArray& lod, std::size_t begin, st
       current[recount[k]] = batch[k];
     }
     for (std::int32_t g : patches_of[node])
-      if (--patch_waiting[g] == 0) triangles += tree.patch_group_first[g + 1] - tree.patch_group_first[g];
+      if (--patch_waiting[g] == 0) triangles += tree.patches.group_first[g + 1] - tree.patches.group_first[g];
     accumulated[i + 1] = triangles;
   }
 }
@@ -183,20 +183,20 @@ LodArray number_nodes(const McOctree& tree) {
   // found through the neighbour arrays of its ancestors: the cell's cube one
   // level up is the parent's or one of the parent's neighbours, and so on.
   auto dependencies = [&](std::int32_t node, std::int32_t* deps) {
-    const int level = tree.levels[node];
+    const int level = tree.nodes.levels[node];
     int x, y, z;
-    unpack_key(tree.keys[node], &x, &y, &z);
+    unpack_key(tree.nodes.keys[node], &x, &y, &z);
     const int side = 1 << level;
-    const auto& around = tree.neighbours[std::size_t(node)];
+    const auto& around = tree.transitions.neighbours[std::size_t(node)];
     int count = 0;
     for (int c = 0; c < 27; ++c) {
       if (c == 13) continue;
       const int nx = x + c % 3 - 1, ny = y + c / 3 % 3 - 1, nz = z + c / 9 - 1;
       if (nx < 0 || ny < 0 || nz < 0 || nx >= side || ny >= side || nz >= side) continue;
-      std::int32_t found = around[c] >= 0 ? tree.parents[around[c]] : -1;
-      for (std::int32_t up = tree.parents[node], s = 1; found < 0; up = tree.parents[up], ++s) {
+      std::int32_t found = around[c] >= 0 ? tree.nodes.parents[around[c]] : -1;
+      for (std::int32_t up = tree.nodes.parents[node], s = 1; found < 0; up = tree.nodes.parents[up], ++s) {
         const int cell = ((nx >> s) - (x >> s) + 1) + 3 * ((ny >> s) - (y >> s) + 1) + 9 * ((nz >> s) - (z >> s) + 1);
-        found = tree.neighbours[std::size_t(up)][cell];
+        found = tree.transitions.neighbours[std::size_t(up)][cell];
       }
       if (std::find(deps, deps + count, found) == deps + count) deps[count++] = found;
     }
@@ -211,9 +211,9 @@ LodArray number_nodes(const McOctree& tree) {
   auto priority = [&](std::int32_t node) {
     if (pinned[node]) return Key{2, 0.f, node};
     int children = 0;
-    for (int c = 0; c < tree.child_counts[node]; ++c) children += tree.triangle_counts[tree.first_child[node] + c];
-    if (children <= tree.triangle_counts[node]) return Key{1, 0.f, node};
-    return Key{0, tree.metrics[node], node};
+    for (int c = 0; c < tree.nodes.child_counts[node]; ++c) children += tree.nodes.triangle_counts[tree.nodes.first_child[node] + c];
+    if (children <= tree.nodes.triangle_counts[node]) return Key{1, 0.f, node};
+    return Key{0, tree.nodes.metrics[node], node};
   };
 
   std::vector<std::uint8_t> expanded(n, 0);
@@ -250,7 +250,7 @@ LodArray number_nodes(const McOctree& tree) {
     queue.pop();
     lod.order.push_back(node);
     expand(node);
-    for (int c = 0; c < tree.child_counts[node]; ++c) enter_cut(tree.first_child[node] + c);
+    for (int c = 0; c < tree.nodes.child_counts[node]; ++c) enter_cut(tree.nodes.first_child[node] + c);
   }
   lod.accumulated = accumulation_table(tree, lod);
   // The closure makes every pinned node expandable before any other.

@@ -33,15 +33,15 @@ LodCursor::LodCursor(const McOctree& tree, const LodArray& lod) : tree_(&tree), 
   needs_left_.resize(groups);
   need_groups_first_.assign(nodes + 1, 0);
   for (std::size_t g = 0; g < groups; ++g) {
-    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
-      ++need_groups_first_[std::size_t(tree.patch_needs[k]) + 1];
+    for (std::int32_t k = tree.patches.needs_first[g]; k < tree.patches.needs_first[g + 1]; ++k)
+      ++need_groups_first_[std::size_t(tree.patches.needs[k]) + 1];
   }
   for (std::size_t n = 0; n < nodes; ++n) need_groups_first_[n + 1] += need_groups_first_[n];
   need_groups_.resize(std::size_t(need_groups_first_[nodes]));
   std::vector<std::int32_t> next(need_groups_first_.begin(), need_groups_first_.end() - 1);
   for (std::size_t g = 0; g < groups; ++g)
-    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
-      need_groups_[std::size_t(next[std::size_t(tree.patch_needs[k])]++)] = std::int32_t(g);
+    for (std::int32_t k = tree.patches.needs_first[g]; k < tree.patches.needs_first[g + 1]; ++k)
+      need_groups_[std::size_t(next[std::size_t(tree.patches.needs[k])]++)] = std::int32_t(g);
 
   rebuild(0);
 }
@@ -54,7 +54,7 @@ void LodCursor::move_to(std::size_t priority) {
   const std::size_t changes = priority > priority_ ? priority - priority_ : priority_ - priority;
   std::size_t cut = cut_nodes_;
   for (std::size_t i = std::min(priority, priority_); i < std::max(priority, priority_); ++i) {
-    const std::size_t children = tree_->child_counts[std::size_t(lod_->order[i])];
+    const std::size_t children = tree_->nodes.child_counts[std::size_t(lod_->order[i])];
     cut = priority > priority_ ? cut + children - 1 : cut - children + 1;
   }
   if (cut < kRebuildRatio * changes) {
@@ -122,8 +122,8 @@ void LodCursor::rebuild(std::size_t priority) {
   emitted_last_move_ += cut_nodes_;
   for (std::size_t g = 0; g < needs_left_.size(); ++g) {
     std::int32_t left = 0;
-    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
-      left += !(flags_[std::size_t(tree.patch_needs[k])] & kExpanded);
+    for (std::int32_t k = tree.patches.needs_first[g]; k < tree.patches.needs_first[g + 1]; ++k)
+      left += !(flags_[std::size_t(tree.patches.needs[k])] & kExpanded);
     needs_left_[g] = left;
     if (left == 0) append_group(g);
   }
@@ -151,7 +151,7 @@ void LodCursor::collapse(std::int32_t node) {
 
 void LodCursor::prefetch(std::int32_t node) const {
   const std::size_t n = std::size_t(node);
-  __builtin_prefetch(&tree_->parents[n]);
+  __builtin_prefetch(&tree_->nodes.parents[n]);
   __builtin_prefetch(&block_count_[n]);
   __builtin_prefetch(&block_first_[n]);
   prefetch_node(*tree_, node);
@@ -171,14 +171,14 @@ void LodCursor::mark(std::int32_t node) {
 void LodCursor::mark_around(std::int32_t node) {
   const std::size_t n = std::size_t(node);
   mark(node);
-  for (std::int32_t c = tree_->first_child[n], end = c + tree_->child_counts[n]; c < end; ++c) mark(c);
-  const auto& around = tree_->neighbours[n];  // expanded nodes are internal
+  for (std::int32_t c = tree_->nodes.first_child[n], end = c + tree_->nodes.child_counts[n]; c < end; ++c) mark(c);
+  const auto& around = tree_->transitions.neighbours[n];  // expanded nodes are internal
   for (const int c : splitting_cells())
     if (around[std::size_t(c)] >= 0) mark(around[std::size_t(c)]);
 }
 
 bool LodCursor::in_cut(std::int32_t node) const {
-  const std::int32_t parent = tree_->parents[std::size_t(node)];
+  const std::int32_t parent = tree_->nodes.parents[std::size_t(node)];
   return !(flags_[std::size_t(node)] & kExpanded) && (parent < 0 || (flags_[std::size_t(parent)] & kExpanded));
 }
 
@@ -201,9 +201,9 @@ void LodCursor::emit(std::int32_t node) {
 
 void LodCursor::append_group(std::size_t group) {
   const std::size_t end = buffer_.size();
-  const auto& patches = tree_->patch_triangles;
-  buffer_.insert(buffer_.end(), patches.begin() + tree_->patch_group_first[group],
-                 patches.begin() + tree_->patch_group_first[group + 1]);
+  const auto& patches = tree_->patches.triangles;
+  buffer_.insert(buffer_.end(), patches.begin() + tree_->patches.group_first[group],
+                 patches.begin() + tree_->patches.group_first[group + 1]);
   place(std::int32_t(tree_->size() + group), end);
 }
 

@@ -35,7 +35,7 @@ class LodCursor {
 
   std::size_t priority() const { return priority_; }
 
-  // Index buffer into tree.positions, for a renderer as it is: the level's
+  // Index buffer into tree.vertices.positions, for a renderer as it is: the level's
   // triangles, in blocks per cut node and patch group, and holes of
   // degenerate triangles (all three indices equal) where blocks were removed.
   // Holes are at most a quarter of it after every move.

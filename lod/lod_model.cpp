@@ -36,12 +36,8 @@ void require_structure(const LodModel& model, LodStructure s, const std::string&
 
 LodModel model_from_octree(McOctree tree, LodArray lod) {
   LodModel model;
-  model.vertices.positions = std::move(tree.positions);
-  model.vertices.normals = std::move(tree.normals);
-  model.vertices.colors = std::move(tree.colors);
-  tree.positions.clear();
-  tree.normals.clear();
-  tree.colors.clear();
+  model.vertices = std::move(tree.vertices);
+  tree.vertices = {};
   model.octree = OctreeLod{std::move(tree), std::move(lod)};
   return model;
 }
@@ -231,7 +227,7 @@ OctreeSummary describe_octree(const LodModel& model) {
   s.nodes = t.size();
   s.nodes_per_level.assign(std::size_t(t.depth) + 1, 0);
   for (std::size_t n = 0; n < t.size(); ++n) {
-    ++s.nodes_per_level[t.levels[n]];
+    ++s.nodes_per_level[t.nodes.levels[n]];
     s.leaves += t.is_leaf(n);
   }
   s.expansions = lod.full();

@@ -30,16 +30,8 @@ enum class LodStructure { kOctree, kClusters };
 // "octree" or "clusters", as the command line spells them.
 const char* structure_name(LodStructure s);
 
-// Positions, normals and colours every level of every structure indexes.
-struct VertexArray {
-  std::vector<Vec3f> positions;
-  std::vector<Vec3f> normals;  // empty or one per position
-  std::vector<Rgb> colors;     // empty or one per position
-  std::size_t size() const { return positions.size(); }
-};
-
 // The octree with its priority numbering. Its vertices live in the model's
-// VertexArray (tree.positions, normals and colors are left empty there).
+// VertexArray (tree.vertices is left empty there).
 struct OctreeLod {
   McOctree tree;
   LodArray lod;

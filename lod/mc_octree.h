@@ -1,4 +1,5 @@
-// The marching-cube octree (seed 003 §5.1): the leaf cube nodes of a
+// The marching-cube octree (Lee, *Efficient LOD Model Generation of 3D Objects
+// using Prioritized Marching Cube Octree*, 2007, §5.1): the leaf cube nodes of a
 // reconstruction, and above them every coarser cube that holds one, each a
 // marching cube of its own with corner signs, a vertex on each crossed edge and
 // its triangles.
@@ -6,7 +7,7 @@
 // Corner signs. A corner shared by leaf cubes keeps the leaves' signed
 // distance; any other lattice point gets the same signed-distance field,
 // evaluated once per point. So every node that shares a corner sees the same
-// sign, which is what keeps neighbouring nodes' faces in agreement (the seed
+// sign, which is what keeps neighbouring nodes' faces in agreement (Lee
 // derives parents' signs from their children, which neighbours can see
 // differently).
 //
@@ -15,6 +16,8 @@
 // (§5.1: "extending the child edge that holds the crossing"): coarse nodes share
 // the finest mesh's vertices instead of copying them. Only where no leaf has a
 // vertex on that edge is one added, interpolated on the leaf edge.
+//
+// The build runs as named phases, one file each; lod/octree_build.h lists them.
 #pragma once
 
 #include "core/types.h"
@@ -28,12 +31,9 @@
 
 namespace scan2lod {
 
-struct McOctree {
-  CubeGrid grid;   // the leaves' grid
-  int depth = 0;   // leaves sit at level depth; resolution == 2^depth
-
-  // Nodes, level by level from the root (level 0); a node's children are
-  // contiguous and on the next level.
+// The nodes, level by level from the root (level 0); a node's children are
+// contiguous and on the next level. Every array has one entry per node.
+struct OctreeNodes {
   std::vector<std::uint64_t> keys;  // packed (x, y, z) on its level's lattice
   std::vector<std::uint8_t> levels;
   std::vector<std::int32_t> parents;       // -1 for the root
@@ -45,31 +45,58 @@ struct McOctree {
   std::vector<std::uint8_t> triangle_counts;
   std::vector<float> metrics;  // LOD metric (OctreeOptions::metric): larger expands first; 0 for leaves
 
-  // Crack patching (lod/transition.h), for the nodes above the leaves, which
-  // come first: indexed by node in [0, internal_nodes()).
+  std::size_t size() const { return keys.size(); }
+};
+
+// Crack patching (lod/transition.h), for the nodes above the leaves, which
+// come first: indexed by node in [0, internal nodes).
+struct OctreeTransitions {
   std::vector<std::uint32_t> boundary_inside;  // bit p: local lattice point p is inside
   std::vector<std::array<std::int32_t, kSubEdges>> sub_edge_vertices;
-  std::vector<std::int32_t> centre_vertices;
+  std::vector<std::int32_t> centre_vertices;  // -1 where nothing crosses the node's boundary
   std::vector<std::array<std::int32_t, 27>> neighbours;  // node in each cell around (13: itself), or -1
 
-  std::vector<Triangle> triangles;        // every node's own triangles
-  // The leaves' hole patches (CubeNodes::patch_triangles), grouped by hole: a
-  // group shows once every node whose children hold its rim has expanded.
-  std::vector<Triangle> patch_triangles;
-  std::vector<std::int32_t> patch_group_first;  // groups + 1 offsets into patch_triangles
-  std::vector<std::int32_t> patch_needs_first;  // groups + 1 offsets into patch_needs
-  std::vector<std::int32_t> patch_needs;        // nodes that must be expanded
+  std::size_t size() const { return centre_vertices.size(); }
+};
 
-  // One vertex array for every level: the full mesh's vertices first.
+// The leaves' hole patches (CubeNodes::patch_triangles), grouped by hole: a
+// group shows once every node whose children hold its rim has expanded.
+struct OctreePatches {
+  std::vector<Triangle> triangles;
+  std::vector<std::int32_t> group_first;  // groups + 1 offsets into triangles
+  std::vector<std::int32_t> needs_first;  // groups + 1 offsets into needs
+  std::vector<std::int32_t> needs;        // nodes that must be expanded
+
+  std::size_t groups() const { return group_first.empty() ? 0 : group_first.size() - 1; }
+};
+
+// Positions, normals and colours every level of every LOD structure indexes
+// (lod/lod_model.h). The octree's: the full mesh's vertices first, then the
+// ones it adds (on edges no leaf crosses, and the centres).
+struct VertexArray {
   std::vector<Vec3f> positions;
-  std::vector<Vec3f> normals;
-  std::vector<Rgb> colors;
-  std::size_t mesh_vertices = 0;
+  std::vector<Vec3f> normals;  // empty or one per position
+  std::vector<Rgb> colors;     // empty or one per position
+  std::size_t size() const { return positions.size(); }
+};
 
-  std::size_t size() const { return keys.size(); }
-  bool is_leaf(std::size_t n) const { return first_child[n] < 0; }
-  std::size_t internal_nodes() const { return centre_vertices.size(); }
-  std::size_t patch_groups() const { return patch_group_first.empty() ? 0 : patch_group_first.size() - 1; }
+struct McOctree {
+  CubeGrid grid;   // the leaves' grid
+  int depth = 0;   // leaves sit at level depth; resolution == 2^depth
+
+  OctreeNodes nodes;
+  OctreeTransitions transitions;
+  std::vector<Triangle> triangles;  // every node's own triangles (OctreeNodes::first_triangle)
+  OctreePatches patches;
+  // Built with the tree; LodModel keeps them in its shared VertexArray and
+  // leaves these empty (model_from_octree).
+  VertexArray vertices;
+  std::size_t mesh_vertices = 0;  // the full mesh's vertices: the first of the shared array
+
+  std::size_t size() const { return nodes.size(); }
+  bool is_leaf(std::size_t n) const { return nodes.first_child[n] < 0; }
+  std::size_t internal_nodes() const { return transitions.size(); }
+  std::size_t patch_groups() const { return patches.groups(); }
 };
 
 // What orders the expansions (lod_array.h numbers nodes by it, largest first).

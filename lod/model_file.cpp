@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "lod/model_pack.h"
 #include "lod/transition.h"
 #include "reconstruct/cube_table.h"
 
@@ -11,10 +12,16 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <system_error>
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 namespace scan2lod {
 
@@ -76,6 +83,131 @@ constexpr std::uint64_t kP1 = 0x9E3779B185EBCA87ull, kP2 = 0xC2B2AE3D27D4EB4Full
 std::uint64_t xxh_round(std::uint64_t acc, std::uint64_t input) { return rotl(acc + input * kP2, 31) * kP1; }
 std::uint64_t xxh_merge(std::uint64_t acc, std::uint64_t v) { return (acc ^ xxh_round(0, v)) * kP1 + kP4; }
 
+// What the sections hold besides the model's arrays as they lie in memory:
+// the records (the grid, the pinned count, the cluster hierarchy's info) and,
+// from format 4 on, the octree packed (lod/model_pack.h).
+struct Records {
+  std::uint8_t grid[kGridRecordBytes] = {};
+  std::uint64_t pinned = 0;
+  std::uint64_t cluster_info[3] = {0, 0, 0};
+  PackedOctree packed;
+};
+
+// A section's payload in memory: element size, count and bytes, and for an
+// array how to size it before reading into it.
+struct Payload {
+  std::uint32_t element_size = 0;
+  std::uint64_t count = 0;
+  void* data = nullptr;
+  void* (*resize)(void* vector, std::uint64_t count) = nullptr;  // null for a record
+  void* vector = nullptr;
+};
+
+template <class T>
+Payload array(std::vector<T>& v) {
+  return {std::uint32_t(sizeof(T)), std::uint64_t(v.size()), static_cast<void*>(v.data()),
+          [](void* vector, std::uint64_t count) -> void* {
+            auto& v = *static_cast<std::vector<T>*>(vector);
+            resize_for_load(&v, count);
+            return static_cast<void*>(v.data());
+          },
+          &v};
+}
+
+template <class T>
+Payload record(T* r, std::size_t bytes) {
+  return {std::uint32_t(bytes), 1, static_cast<void*>(r)};
+}
+
+// Which structure a section belongs to: the shared vertices are always
+// written, the octree's and the clusters' sections when the model has them.
+enum class Part { kVertices, kOctree, kClusters };
+
+struct SectionSpec {
+  char tag[5];
+  Part part;
+  bool required;  // flags bit 0
+  Payload (*payload)(LodModel& model, Records& records);
+  std::uint32_t first_major = 2, last_major = kModelFormatMajor;  // the formats that hold it
+
+  bool in(std::uint32_t major) const { return major >= first_major && major <= last_major; }
+};
+
+constexpr std::uint32_t kUnpacked = 3;  // the last format that stored the octree's arrays whole
+constexpr std::uint32_t kPacked = 4;    // the first that packs them
+
+OctreeNodes& nodes_of(LodModel& m) { return m.octree->tree.nodes; }
+OctreeTransitions& transitions_of(LodModel& m) { return m.octree->tree.transitions; }
+OctreePatches& patches_of(LodModel& m) { return m.octree->tree.patches; }
+
+// Every section the format knows, in the order the writer lays them out
+// (model_file.h describes each). Encoding and decoding both walk this table.
+const SectionSpec kSections[] = {
+    {"POSN", Part::kVertices, true, [](LodModel& m, Records&) { return array(m.vertices.positions); }},
+    {"NRML", Part::kVertices, true, [](LodModel& m, Records&) { return array(m.vertices.normals); }},
+    {"COLR", Part::kVertices, true, [](LodModel& m, Records&) { return array(m.vertices.colors); }},
+    {"GRID", Part::kOctree, true, [](LodModel&, Records& r) { return record(r.grid, kGridRecordBytes); }},
+    {"KEYS", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).keys); }, 2, kUnpacked},
+    {"LEVL", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).levels); }, 2, kUnpacked},
+    {"PRNT", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).parents); }, 2, kUnpacked},
+    {"FCHD", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).first_child); }, 2, kUnpacked},
+    {"NCHD", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).child_counts); }, 2, kUnpacked},
+    {"CHLD", Part::kOctree, true, [](LodModel&, Records& r) { return array(r.packed.child_masks); }, kPacked},
+    {"CASE", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).cases); }},
+    {"EDGV", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).edge_vertices); }, 2, kUnpacked},
+    {"EDGM", Part::kOctree, true, [](LodModel&, Records& r) { return array(r.packed.edge_masks); }, kPacked},
+    {"EDGP", Part::kOctree, true, [](LodModel&, Records& r) { return array(r.packed.edge_vertices); }, kPacked},
+    {"FTRI", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).first_triangle); }, 2, kUnpacked},
+    {"NTRI", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).triangle_counts); }, 2, kUnpacked},
+    {"TMSK", Part::kOctree, true, [](LodModel&, Records& r) { return array(r.packed.triangle_masks); }, kPacked},
+    {"METR", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).metrics); }},
+    {"BINS", Part::kOctree, true, [](LodModel& m, Records&) { return array(transitions_of(m).boundary_inside); }},
+    {"SUBV", Part::kOctree, true, [](LodModel& m, Records&) { return array(transitions_of(m).sub_edge_vertices); }, 2, kUnpacked},
+    {"SUBM", Part::kOctree, true, [](LodModel&, Records& r) { return array(r.packed.sub_edge_masks); }, kPacked},
+    {"SUBP", Part::kOctree, true, [](LodModel&, Records& r) { return array(r.packed.sub_edge_vertices); }, kPacked},
+    {"CNTR", Part::kOctree, true, [](LodModel& m, Records&) { return array(transitions_of(m).centre_vertices); }},
+    {"NBRS", Part::kOctree, true, [](LodModel& m, Records&) { return array(transitions_of(m).neighbours); }, 2, kUnpacked},
+    {"TRIS", Part::kOctree, true, [](LodModel& m, Records&) { return array(m.octree->tree.triangles); }, 2, kUnpacked},
+    {"PTRI", Part::kOctree, true, [](LodModel& m, Records&) { return array(patches_of(m).triangles); }},
+    {"PGRP", Part::kOctree, true, [](LodModel& m, Records&) { return array(patches_of(m).group_first); }},
+    {"PNDF", Part::kOctree, true, [](LodModel& m, Records&) { return array(patches_of(m).needs_first); }},
+    {"PNDS", Part::kOctree, true, [](LodModel& m, Records&) { return array(patches_of(m).needs); }},
+    {"LODO", Part::kOctree, true, [](LodModel& m, Records&) { return array(m.octree->lod.order); }},
+    {"LODA", Part::kOctree, true, [](LodModel& m, Records&) { return array(m.octree->lod.accumulated); }},
+    // 1.1, optional: older readers offer levels inside it.
+    {"PINC", Part::kOctree, false, [](LodModel&, Records& r) { return record(&r.pinned, 8); }},
+    {"CINF", Part::kClusters, true, [](LodModel&, Records& r) { return record(r.cluster_info, 24); }, 3},
+    {"CLUS", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->clusters); }, 3},
+    {"CTRI", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->triangles); }, 3},
+    {"CGRP", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->groups); }, 3},
+};
+
+bool has_part(const LodModel& model, Part part) {
+  return part == Part::kVertices || (part == Part::kOctree ? model.octree.has_value() : model.clusters.has_value());
+}
+
+// The records as the writer of format `major` lays them out.
+Records records_of(const LodModel& model, std::uint32_t major) {
+  Records r;
+  if (model.octree && major >= kPacked) r.packed = pack_octree(model.octree->tree);
+  if (model.octree) {
+    const McOctree& t = model.octree->tree;
+    for (int i = 0; i < 3; ++i) std::memcpy(r.grid + 8 * i, &t.grid.origin[i], 8);
+    std::memcpy(r.grid + 24, &t.grid.cube_size, 8);
+    const std::int32_t resolution = t.grid.resolution, depth = t.depth;
+    std::memcpy(r.grid + 32, &resolution, 4);
+    std::memcpy(r.grid + 36, &depth, 4);
+    put_u64(r.grid + 40, std::uint64_t(t.mesh_vertices));
+    r.pinned = model.octree->lod.pinned;
+  }
+  if (model.clusters) {
+    r.cluster_info[0] = std::uint64_t(model.clusters->full_triangles);
+    r.cluster_info[1] = model.cluster_vertex_first;
+    r.cluster_info[2] = model.cluster_vertex_count;
+  }
+  return r;
+}
+
 // One section as the writer lays it out.
 struct OutSection {
   std::uint32_t tag;
@@ -84,11 +216,6 @@ struct OutSection {
   const void* data;
   std::uint32_t flags = kRequired;
 };
-
-template <class T>
-OutSection out(const char (&tag)[5], const std::vector<T>& v) {
-  return {fourcc(tag), std::uint32_t(sizeof(T)), std::uint64_t(v.size()), v.data()};
-}
 
 // One directory entry as read.
 struct Section {
@@ -138,61 +265,17 @@ std::uint64_t model_checksum(const void* data, std::size_t size, std::uint64_t s
   return h;
 }
 
-std::vector<std::uint8_t> encode_model(const LodModel& model) {
-  std::vector<OutSection> sections = {
-      out("POSN", model.vertices.positions),
-      out("NRML", model.vertices.normals),
-      out("COLR", model.vertices.colors),
-  };
-  std::vector<std::uint8_t> grid(kGridRecordBytes, 0);
-  std::uint64_t pinned = 0;
-  if (model.octree) {
-    const McOctree& t = model.octree->tree;
-    const LodArray& lod = model.octree->lod;
-    for (int i = 0; i < 3; ++i) std::memcpy(grid.data() + 8 * i, &t.grid.origin[i], 8);
-    std::memcpy(grid.data() + 24, &t.grid.cube_size, 8);
-    const std::int32_t resolution = t.grid.resolution, depth = t.depth;
-    std::memcpy(grid.data() + 32, &resolution, 4);
-    std::memcpy(grid.data() + 36, &depth, 4);
-    put_u64(grid.data() + 40, std::uint64_t(t.mesh_vertices));
-    pinned = lod.pinned;
-    const OutSection octree[] = {
-        {fourcc("GRID"), std::uint32_t(kGridRecordBytes), 1, grid.data()},
-        out("KEYS", t.keys),
-        out("LEVL", t.levels),
-        out("PRNT", t.parents),
-        out("FCHD", t.first_child),
-        out("NCHD", t.child_counts),
-        out("CASE", t.cases),
-        out("EDGV", t.edge_vertices),
-        out("FTRI", t.first_triangle),
-        out("NTRI", t.triangle_counts),
-        out("METR", t.metrics),
-        out("BINS", t.boundary_inside),
-        out("SUBV", t.sub_edge_vertices),
-        out("CNTR", t.centre_vertices),
-        out("NBRS", t.neighbours),
-        out("TRIS", t.triangles),
-        out("PTRI", t.patch_triangles),
-        out("PGRP", t.patch_group_first),
-        out("PNDF", t.patch_needs_first),
-        out("PNDS", t.patch_needs),
-        out("LODO", lod.order),
-        out("LODA", lod.accumulated),
-        {fourcc("PINC"), 8, 1, &pinned, 0},  // 1.1, optional: older readers offer levels inside it
-    };
-    sections.insert(sections.end(), std::begin(octree), std::end(octree));
-  }
-  std::uint64_t info[3] = {0, 0, 0};
-  if (model.clusters) {
-    const ClusterHierarchy& h = *model.clusters;
-    info[0] = std::uint64_t(h.full_triangles);
-    info[1] = model.cluster_vertex_first;
-    info[2] = model.cluster_vertex_count;
-    sections.push_back({fourcc("CINF"), 24, 1, info});
-    sections.push_back(out("CLUS", h.clusters));
-    sections.push_back(out("CTRI", h.triangles));
-    sections.push_back(out("CGRP", h.groups));
+std::vector<std::uint8_t> encode_model(const LodModel& model, std::uint32_t major) {
+  if (major < kUnpacked || major > kModelFormatMajor)
+    throw std::invalid_argument("encode_model: format " + std::to_string(major) + " is not written");
+  Records records = records_of(model, major);
+  // The table's payloads are only read here.
+  LodModel& readable = const_cast<LodModel&>(model);
+  std::vector<OutSection> sections;
+  for (const SectionSpec& spec : kSections) {
+    if (!has_part(model, spec.part) || !spec.in(major)) continue;
+    const Payload p = spec.payload(readable, records);
+    sections.push_back({fourcc(spec.tag), p.element_size, p.count, p.data, spec.required ? kRequired : 0});
   }
   const std::size_t count = sections.size();
   const std::uint64_t directory_end = kHeaderBytes + kEntryBytes * count + 8;
@@ -203,8 +286,8 @@ std::vector<std::uint8_t> encode_model(const LodModel& model) {
   std::vector<std::uint8_t> bytes(length, 0);
   std::uint8_t* header = bytes.data();
   std::memcpy(header, kMagic, 8);
-  put_u32(header + 8, kModelFormatMajor);
-  put_u32(header + 12, kModelFormatMinor);
+  put_u32(header + 8, major);
+  put_u32(header + 12, major == kModelFormatMajor ? kModelFormatMinor : 0);
   put_u32(header + 16, std::uint32_t(count));
   put_u32(header + 20, 0);
   put_u64(header + 24, length);
@@ -259,12 +342,25 @@ LodModel load_model(const std::string& path) {
   if (!fs::is_regular_file(path, ec)) throw InputError(path, "cannot read the model: not a regular file");
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) throw InputError(path, "cannot read the model: " + ec.message());
-  FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw InputError(path, std::string("cannot read the model: ") + std::strerror(errno));
-  // Not zeroed first: every byte is read over.
+  // Mapped rather than read into a buffer: the decoder copies each section
+  // once, straight from the page cache.
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) throw InputError(path, std::string("cannot read the model: ") + std::strerror(errno));
+  void* mapped = size ? ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0) : MAP_FAILED;
+  if (mapped != MAP_FAILED) {
+    ::close(fd);
+    const std::unique_ptr<void, std::function<void(void*)>> unmap(mapped, [size](void* p) { ::munmap(p, size); });
+    return decode_model(static_cast<const std::uint8_t*>(mapped), size, path);
+  }
+  // Not mappable (or empty): read it whole. Not zeroed first: every byte is read over.
   const std::unique_ptr<std::uint8_t[]> bytes(new std::uint8_t[std::max<std::uintmax_t>(size, 1)]);
-  const std::size_t got = size ? std::fread(bytes.get(), 1, size, f) : 0;
-  std::fclose(f);
+  std::size_t got = 0;
+  while (got < size) {
+    const ssize_t r = ::read(fd, bytes.get() + got, size - got);
+    if (r <= 0) break;
+    got += std::size_t(r);
+  }
+  ::close(fd);
   if (got != size)
     throw InputError(path, "cannot read the model: read " + std::to_string(got) + " of " + std::to_string(size) + " bytes");
   return decode_model(bytes.get(), size, path);
@@ -272,22 +368,202 @@ LodModel load_model(const std::string& path) {
 
 namespace {
 
+constexpr std::size_t kMaxIndex = std::size_t(std::numeric_limits<std::int32_t>::max());
+
+std::string bytes_text(std::uint64_t n) { return std::to_string(n) + (n == 1 ? " byte" : " bytes"); }
+
+// Reads one model from bytes, phase by phase: the header, the directory, the
+// checksums, the sections (walking kSections), then whether the contents
+// agree, so that extraction cannot read out of bounds on what it returns.
+class Decoder {
+ public:
+  Decoder(const std::uint8_t* data, std::size_t size, const std::string& source)
+      : data_(data), size_(size), source_(source) {}
+
+  LodModel decode();
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(source_, what); }
+  [[noreturn]] void bad(const std::string& what) const { fail("inconsistent model: " + what); }
+
+  void read_header();
+  void read_directory();
+  void verify_length_and_checksums() const;
+  void index_sections();
+  const Section& section(const char* tag) const;
+  void read_part(Part part, LodModel* model);
+  void read_grid(McOctree* t) const;
+  void read_pinned(LodArray* lod);
+  void check_vertices(const LodModel& model) const;
+  void decode_clusters(LodModel* model);
+  void check_octree_arrays(const McOctree& t) const;
+  std::size_t check_nodes(const McOctree& t) const;
+  void check_transitions(const McOctree& t, std::size_t internal) const;
+  void check_lod_array(const McOctree& t, const LodArray& lod, std::size_t internal) const;
+
+  const std::uint8_t* data_;
+  std::size_t size_;
+  const std::string& source_;
+  std::uint32_t major_ = 0, minor_ = 0;
+  std::string format_;
+  std::uint64_t file_length_ = 0, directory_end_ = 0;
+  std::vector<Section> sections_;
+  std::map<std::uint32_t, const Section*> by_tag_;
+  Records records_;
+  std::size_t vertices_ = 0;
+};
+
+// Header: what the file is, before anything is trusted.
+void Decoder::read_header() {
+  if (size_ == 0) fail("not a scan2lod model (.mco): the file is empty");
+  if (std::memcmp(data_, kMagic, std::min<std::size_t>(size_, 8)) != 0)
+    fail("not a scan2lod model (.mco): bad magic, the file does not start with \"SCAN2LOD\"");
+  if (size_ < kHeaderBytes) fail("truncated in the header: " + bytes_text(size_) + " of " + std::to_string(kHeaderBytes));
+  if (model_checksum(data_, 32) != get_u64(data_ + 32)) fail("checksum mismatch in the header (damaged file)");
+  major_ = get_u32(data_ + 8);
+  minor_ = get_u32(data_ + 12);
+  if (major_ > kModelFormatMajor)
+    fail("written by a newer scan2lod (format " + std::to_string(major_) + "." + std::to_string(minor_) +
+         ", this reads up to " + std::to_string(kModelFormatMajor) + ")");
+  if (major_ == 0) fail("format version 0 was never written by scan2lod");
+  if (major_ < 2)
+    fail("written by an older scan2lod (format " + std::to_string(major_) + "." + std::to_string(minor_) +
+         "), whose crack patching triangulated differently from this one's; rebuild the model with scan2lod build");
+  format_ = "format " + std::to_string(major_) + "." + std::to_string(minor_);
+  const std::uint64_t section_count = get_u32(data_ + 16);
+  file_length_ = get_u64(data_ + 24);
+  directory_end_ = kHeaderBytes + kEntryBytes * section_count + 8;
+  if (file_length_ < directory_end_ + 8)
+    fail("the header's file length " + std::to_string(file_length_) + " cannot hold " +
+         std::to_string(section_count) + " sections");
+}
+
+// Directory: where each section lies; all of it inside the stated length.
+void Decoder::read_directory() {
+  const std::uint64_t section_count = get_u32(data_ + 16);
+  if (size_ < directory_end_)
+    fail("truncated in the section directory: " + bytes_text(size_) + " of " + std::to_string(file_length_));
+  if (model_checksum(data_ + kHeaderBytes, kEntryBytes * section_count) != get_u64(data_ + directory_end_ - 8))
+    fail("checksum mismatch in the section directory (damaged file)");
+  sections_.resize(section_count);
+  for (std::size_t i = 0; i < section_count; ++i) {
+    const std::uint8_t* e = data_ + kHeaderBytes + kEntryBytes * i;
+    Section& s = sections_[i];
+    s = {get_u32(e), get_u32(e + 4), get_u32(e + 8), get_u64(e + 16), get_u64(e + 24), get_u64(e + 32), get_u64(e + 40)};
+    const std::string name = "section " + tag_name(s.tag);
+    if (s.element_size == 0 || s.count > std::numeric_limits<std::uint64_t>::max() / s.element_size ||
+        s.count * s.element_size != s.length)
+      fail(name + ": " + std::to_string(s.count) + " elements of " + bytes_text(s.element_size) + " do not make its " +
+           bytes_text(s.length));
+    if (s.offset < directory_end_ || s.offset > file_length_ - 8 || s.length > file_length_ - 8 - s.offset)
+      fail(name + ": its " + bytes_text(s.length) + " at offset " + std::to_string(s.offset) +
+           " lie outside the model's " + bytes_text(file_length_));
+  }
+}
+
+// Length: a short file is truncated somewhere; say where. Then every checksum.
+void Decoder::verify_length_and_checksums() const {
+  if (size_ < file_length_) {
+    const Section* cut = nullptr;
+    for (const Section& s : sections_)
+      if (s.offset + s.length > size_ && (!cut || s.offset < cut->offset)) cut = &s;
+    fail("truncated in " + (cut ? "section " + tag_name(cut->tag) : std::string("the trailing checksum")) + ": " +
+         bytes_text(size_) + " of " + std::to_string(file_length_));
+  }
+  if (size_ > file_length_)
+    fail(bytes_text(size_ - file_length_) + " after the end of the model (" + bytes_text(file_length_) + ")");
+  for (const Section& s : sections_)
+    if (model_checksum(data_ + s.offset, s.length) != s.checksum)
+      fail("checksum mismatch in section " + tag_name(s.tag) + " (damaged file)");
+  if (model_checksum(data_, file_length_ - 8) != get_u64(data_ + file_length_ - 8))
+    fail("checksum mismatch over the whole file (damaged padding)");
+}
+
+// Sections by tag: each known one once; unknown ones only if optional.
+void Decoder::index_sections() {
+  for (const Section& s : sections_)
+    if (!by_tag_.emplace(s.tag, &s).second) fail("section " + tag_name(s.tag) + " appears twice");
+  for (const Section& s : sections_) {
+    const bool known = std::any_of(std::begin(kSections), std::end(kSections),
+                                   [&](const SectionSpec& spec) { return fourcc(spec.tag) == s.tag; });
+    if ((s.flags & kRequired) && !known)
+      fail("needs section " + tag_name(s.tag) + ", which this scan2lod does not know (" + format_ + ", this reads " +
+           std::to_string(kModelFormatMajor) + "." + std::to_string(kModelFormatMinor) + "): written by a newer scan2lod");
+  }
+}
+
+const Section& Decoder::section(const char* tag) const {
+  std::uint32_t code = 0;
+  for (int i = 0; i < 4; ++i) code |= std::uint32_t(std::uint8_t(tag[i])) << (8 * i);
+  auto it = by_tag_.find(code);
+  if (it == by_tag_.end()) throw InputError(source_, "missing section '" + std::string(tag) + "'");
+  return *it->second;
+}
+
+// The arrays of one part, as kSections lists them (records are read by their
+// own functions, which check their sizes).
+void Decoder::read_part(Part part, LodModel* model) {
+  for (const SectionSpec& spec : kSections) {
+    if (spec.part != part || !spec.in(major_)) continue;
+    const Payload p = spec.payload(*model, records_);
+    if (!p.resize) continue;
+    const Section& s = section(spec.tag);
+    if (s.element_size != p.element_size)
+      fail("section '" + std::string(spec.tag) + "' has elements of " + bytes_text(s.element_size) + ", expected " +
+           std::to_string(p.element_size));
+    void* into = p.resize(p.vector, s.count);  // s.length bytes, inside the file: bounded by its size
+    if (s.length) std::memcpy(into, data_ + s.offset, s.length);
+  }
+}
+
+void Decoder::read_grid(McOctree* t) const {
+  const Section& s = section("GRID");
+  if (s.count != 1 || s.element_size < kGridRecordBytes)
+    fail("section 'GRID' must be one record of at least " + std::to_string(kGridRecordBytes) + " bytes");
+  const std::uint8_t* g = data_ + s.offset;
+  for (int i = 0; i < 3; ++i) std::memcpy(&t->grid.origin[i], g + 8 * i, 8);
+  std::memcpy(&t->grid.cube_size, g + 24, 8);
+  std::int32_t resolution, depth;
+  std::memcpy(&resolution, g + 32, 4);
+  std::memcpy(&depth, g + 36, 4);
+  t->grid.resolution = resolution;
+  t->depth = depth;
+  t->mesh_vertices = std::size_t(get_u64(g + 40));
+}
+
+// Optional (added in 1.1): without it nothing is pinned.
+void Decoder::read_pinned(LodArray* lod) {
+  if (!by_tag_.count(fourcc("PINC"))) return;
+  const Section& s = section("PINC");
+  if (s.element_size != 8)
+    fail("section 'PINC' has elements of " + bytes_text(s.element_size) + ", expected 8");
+  if (s.count != 1) fail("section 'PINC' must hold one count, not " + std::to_string(s.count));
+  lod->pinned = std::size_t(std::min<std::uint64_t>(get_u64(data_ + s.offset), std::numeric_limits<std::size_t>::max()));
+}
+
+void Decoder::check_vertices(const LodModel& model) const {
+  const std::size_t vertices = model.vertices.size();
+  if (vertices > kMaxIndex) bad(std::to_string(vertices) + " vertices, more than 32-bit indices address");
+  if (!model.vertices.normals.empty() && model.vertices.normals.size() != vertices)
+    bad(std::to_string(model.vertices.normals.size()) + " normals for " + std::to_string(vertices) + " vertices");
+  if (!model.vertices.colors.empty() && model.vertices.colors.size() != vertices)
+    bad(std::to_string(model.vertices.colors.size()) + " colours for " + std::to_string(vertices) + " vertices");
+}
+
 // The cluster hierarchy's sections, checked so that no cut can read out of
 // bounds: ranges inside their arrays, groups that exist, finite bounds.
-template <class Section, class Read, class Bad>
-void decode_clusters(const std::uint8_t* data, Section section, Read read, Bad bad, std::size_t vertices,
-                     LodModel* model) {
-  const auto& info = section("CINF");
+void Decoder::decode_clusters(LodModel* model) {
+  const Section& info = section("CINF");
   if (info.count != 1 || info.element_size != 24) bad("section 'CINF' must be one record of 24 bytes");
-  const std::uint64_t full = get_u64(data + info.offset), first = get_u64(data + info.offset + 8),
-                      count = get_u64(data + info.offset + 16);
+  const std::uint64_t full = get_u64(data_ + info.offset), first = get_u64(data_ + info.offset + 8),
+                      count = get_u64(data_ + info.offset + 16);
+  const std::size_t vertices = vertices_;
   if (first > vertices || count > vertices - first)
     bad("the cluster hierarchy's vertices " + std::to_string(first) + "+" + std::to_string(count) + " lie outside the " +
         std::to_string(vertices) + " vertices");
-  ClusterHierarchy h;
-  read("CLUS", &h.clusters);
-  read("CTRI", &h.triangles);
-  read("CGRP", &h.groups);
+  model->clusters.emplace();
+  read_part(Part::kClusters, model);
+  ClusterHierarchy& h = *model->clusters;
   h.full_triangles = std::int64_t(std::min<std::uint64_t>(full, std::uint64_t(std::numeric_limits<std::int64_t>::max())));
   if (h.clusters.empty()) bad("the cluster hierarchy has no clusters");
   for (std::size_t i = 0; i < h.triangles.size(); ++i)
@@ -323,169 +599,14 @@ void decode_clusters(const std::uint8_t* data, Section section, Read read, Bad b
   if (level0 != h.full_triangles)
     bad("the full-detail clusters hold " + std::to_string(level0) + " triangles, 'CINF' says " +
         std::to_string(h.full_triangles));
-  model->clusters = std::move(h);
   model->cluster_vertex_first = std::size_t(first);
   model->cluster_vertex_count = std::size_t(count);
 }
 
-}  // namespace
-
-LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& source) {
-  auto fail = [&](const std::string& what) { throw InputError(source, what); };
-  auto bytes = [](std::uint64_t n) { return std::to_string(n) + (n == 1 ? " byte" : " bytes"); };
-
-  // Header: what the file is, before anything is trusted.
-  if (size == 0) fail("not a scan2lod model (.mco): the file is empty");
-  if (std::memcmp(data, kMagic, std::min<std::size_t>(size, 8)) != 0)
-    fail("not a scan2lod model (.mco): bad magic, the file does not start with \"SCAN2LOD\"");
-  if (size < kHeaderBytes) fail("truncated in the header: " + bytes(size) + " of " + std::to_string(kHeaderBytes));
-  if (model_checksum(data, 32) != get_u64(data + 32)) fail("checksum mismatch in the header (damaged file)");
-  const std::uint32_t major = get_u32(data + 8), minor = get_u32(data + 12);
-  if (major > kModelFormatMajor)
-    fail("written by a newer scan2lod (format " + std::to_string(major) + "." + std::to_string(minor) +
-         ", this reads up to " + std::to_string(kModelFormatMajor) + ")");
-  if (major == 0) fail("format version 0 was never written by scan2lod");
-  if (major < 2)
-    fail("written by an older scan2lod (format " + std::to_string(major) + "." + std::to_string(minor) +
-         "), whose crack patching triangulated differently from this one's; rebuild the model with scan2lod build");
-  const std::string format = "format " + std::to_string(major) + "." + std::to_string(minor);
-  const std::uint64_t section_count = get_u32(data + 16);
-  const std::uint64_t file_length = get_u64(data + 24);
-  const std::uint64_t directory_end = kHeaderBytes + kEntryBytes * section_count + 8;
-  if (file_length < directory_end + 8)
-    fail("the header's file length " + std::to_string(file_length) + " cannot hold " +
-         std::to_string(section_count) + " sections");
-
-  // Directory: where each section lies; all of it inside the stated length.
-  if (size < directory_end)
-    fail("truncated in the section directory: " + bytes(size) + " of " + std::to_string(file_length));
-  if (model_checksum(data + kHeaderBytes, kEntryBytes * section_count) != get_u64(data + directory_end - 8))
-    fail("checksum mismatch in the section directory (damaged file)");
-  std::vector<Section> sections(section_count);
-  for (std::size_t i = 0; i < section_count; ++i) {
-    const std::uint8_t* e = data + kHeaderBytes + kEntryBytes * i;
-    Section& s = sections[i];
-    s = {get_u32(e), get_u32(e + 4), get_u32(e + 8), get_u64(e + 16), get_u64(e + 24), get_u64(e + 32), get_u64(e + 40)};
-    const std::string name = "section " + tag_name(s.tag);
-    if (s.element_size == 0 || s.count > std::numeric_limits<std::uint64_t>::max() / s.element_size ||
-        s.count * s.element_size != s.length)
-      fail(name + ": " + std::to_string(s.count) + " elements of " + bytes(s.element_size) + " do not make its " +
-           bytes(s.length));
-    if (s.offset < directory_end || s.offset > file_length - 8 || s.length > file_length - 8 - s.offset)
-      fail(name + ": its " + bytes(s.length) + " at offset " + std::to_string(s.offset) +
-           " lie outside the model's " + bytes(file_length));
-  }
-
-  // Length: a short file is truncated somewhere; say where.
-  if (size < file_length) {
-    const Section* cut = nullptr;
-    for (const Section& s : sections)
-      if (s.offset + s.length > size && (!cut || s.offset < cut->offset)) cut = &s;
-    fail("truncated in " + (cut ? "section " + tag_name(cut->tag) : std::string("the trailing checksum")) + ": " +
-         bytes(size) + " of " + std::to_string(file_length));
-  }
-  if (size > file_length) fail(bytes(size - file_length) + " after the end of the model (" + bytes(file_length) + ")");
-  for (const Section& s : sections)
-    if (model_checksum(data + s.offset, s.length) != s.checksum)
-      fail("checksum mismatch in section " + tag_name(s.tag) + " (damaged file)");
-  if (model_checksum(data, file_length - 8) != get_u64(data + file_length - 8))
-    fail("checksum mismatch over the whole file (damaged padding)");
-
-  // Sections by tag: each known one once; unknown ones only if optional.
-  std::map<std::uint32_t, const Section*> by_tag;
-  for (const Section& s : sections)
-    if (!by_tag.emplace(s.tag, &s).second) fail("section " + tag_name(s.tag) + " appears twice");
-  const std::uint32_t known[] = {
-      fourcc("GRID"), fourcc("KEYS"), fourcc("LEVL"), fourcc("PRNT"), fourcc("FCHD"), fourcc("NCHD"), fourcc("CASE"),
-      fourcc("EDGV"), fourcc("FTRI"), fourcc("NTRI"), fourcc("METR"), fourcc("BINS"), fourcc("SUBV"), fourcc("CNTR"),
-      fourcc("NBRS"), fourcc("TRIS"), fourcc("PTRI"), fourcc("PGRP"), fourcc("PNDF"), fourcc("PNDS"), fourcc("POSN"),
-      fourcc("NRML"), fourcc("COLR"), fourcc("LODO"), fourcc("LODA"), fourcc("PINC"), fourcc("CINF"), fourcc("CLUS"),
-      fourcc("CTRI"), fourcc("CGRP")};
-  for (const Section& s : sections)
-    if ((s.flags & kRequired) && std::find(std::begin(known), std::end(known), s.tag) == std::end(known))
-      fail("needs section " + tag_name(s.tag) + ", which this scan2lod does not know (" + format + ", this reads " +
-           std::to_string(kModelFormatMajor) + "." + std::to_string(kModelFormatMinor) + "): written by a newer scan2lod");
-  auto section = [&](const char(&tag)[5]) -> const Section& {
-    auto it = by_tag.find(fourcc(tag));
-    if (it == by_tag.end()) throw InputError(source, "missing section '" + std::string(tag) + "'");
-    return *it->second;
-  };
-  auto read = [&](const char(&tag)[5], auto* v) {
-    using T = typename std::remove_pointer_t<decltype(v)>::value_type;
-    const Section& s = section(tag);
-    if (s.element_size != sizeof(T))
-      fail("section '" + std::string(tag) + "' has elements of " + bytes(s.element_size) + ", expected " +
-           std::to_string(sizeof(T)));
-    v->resize(s.count);  // s.length bytes, inside the file: bounded by its size
-    if (s.length) std::memcpy(static_cast<void*>(v->data()), data + s.offset, s.length);
-  };
-
-  LodModel model;
-  read("POSN", &model.vertices.positions);
-  read("NRML", &model.vertices.normals);
-  read("COLR", &model.vertices.colors);
-  const std::size_t vertices = model.vertices.size();
-  constexpr std::size_t kMaxIndex = std::size_t(std::numeric_limits<std::int32_t>::max());
-  auto bad = [&](const std::string& what) { fail("inconsistent model: " + what); };
-  if (vertices > kMaxIndex) bad(std::to_string(vertices) + " vertices, more than 32-bit indices address");
-  if (!model.vertices.normals.empty() && model.vertices.normals.size() != vertices)
-    bad(std::to_string(model.vertices.normals.size()) + " normals for " + std::to_string(vertices) + " vertices");
-  if (!model.vertices.colors.empty() && model.vertices.colors.size() != vertices)
-    bad(std::to_string(model.vertices.colors.size()) + " colours for " + std::to_string(vertices) + " vertices");
-  const bool has_octree = major == 2 || by_tag.count(fourcc("GRID"));
-  const bool has_clusters = major >= 3 && by_tag.count(fourcc("CINF"));
-  if (!has_octree && !has_clusters) fail("holds no LOD structure: neither an octree ('GRID') nor clusters ('CINF')");
-  if (has_clusters) decode_clusters(data, section, read, bad, vertices, &model);
-  if (!has_octree) return model;
-
-  model.octree.emplace();
-  McOctree& t = model.octree->tree;
-  LodArray& octree_lod = model.octree->lod;
-  {
-    const Section& s = section("GRID");
-    if (s.count != 1 || s.element_size < kGridRecordBytes)
-      fail("section 'GRID' must be one record of at least " + std::to_string(kGridRecordBytes) + " bytes");
-    const std::uint8_t* g = data + s.offset;
-    for (int i = 0; i < 3; ++i) std::memcpy(&t.grid.origin[i], g + 8 * i, 8);
-    std::memcpy(&t.grid.cube_size, g + 24, 8);
-    std::int32_t resolution, depth;
-    std::memcpy(&resolution, g + 32, 4);
-    std::memcpy(&depth, g + 36, 4);
-    t.grid.resolution = resolution;
-    t.depth = depth;
-    t.mesh_vertices = std::size_t(get_u64(g + 40));
-  }
-  read("KEYS", &t.keys);
-  read("LEVL", &t.levels);
-  read("PRNT", &t.parents);
-  read("FCHD", &t.first_child);
-  read("NCHD", &t.child_counts);
-  read("CASE", &t.cases);
-  read("EDGV", &t.edge_vertices);
-  read("FTRI", &t.first_triangle);
-  read("NTRI", &t.triangle_counts);
-  read("METR", &t.metrics);
-  read("BINS", &t.boundary_inside);
-  read("SUBV", &t.sub_edge_vertices);
-  read("CNTR", &t.centre_vertices);
-  read("NBRS", &t.neighbours);
-  read("TRIS", &t.triangles);
-  read("PTRI", &t.patch_triangles);
-  read("PGRP", &t.patch_group_first);
-  read("PNDF", &t.patch_needs_first);
-  read("PNDS", &t.patch_needs);
-  read("LODO", &octree_lod.order);
-  read("LODA", &octree_lod.accumulated);
-  if (by_tag.count(fourcc("PINC"))) {  // optional (added in 1.1): without it nothing is pinned
-    std::vector<std::uint64_t> pinned;
-    read("PINC", &pinned);
-    if (pinned.size() != 1) fail("section 'PINC' must hold one count, not " + std::to_string(pinned.size()));
-    octree_lod.pinned = std::size_t(std::min<std::uint64_t>(pinned[0], std::numeric_limits<std::size_t>::max()));
-  }
-
+void Decoder::check_octree_arrays(const McOctree& t) const {
   // Contents: everything extraction indexes must be in range, and the tree a
   // tree, so that a crafted file cannot make it read out of bounds.
-  const std::size_t n = t.keys.size();
+  const std::size_t n = t.nodes.keys.size(), vertices = vertices_;
   if (n == 0) bad("the octree has no nodes");
   if (n > kMaxIndex) bad(std::to_string(n) + " nodes, more than 32-bit indices address");
   auto per_node = [&](const char* tag, std::size_t count) {
@@ -493,15 +614,15 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
       bad("section '" + std::string(tag) + "' has " + std::to_string(count) + " entries for the " + std::to_string(n) +
           " nodes of 'KEYS'");
   };
-  per_node("LEVL", t.levels.size());
-  per_node("PRNT", t.parents.size());
-  per_node("FCHD", t.first_child.size());
-  per_node("NCHD", t.child_counts.size());
-  per_node("CASE", t.cases.size());
-  per_node("EDGV", t.edge_vertices.size());
-  per_node("FTRI", t.first_triangle.size());
-  per_node("NTRI", t.triangle_counts.size());
-  per_node("METR", t.metrics.size());
+  per_node("LEVL", t.nodes.levels.size());
+  per_node("PRNT", t.nodes.parents.size());
+  per_node("FCHD", t.nodes.first_child.size());
+  per_node("NCHD", t.nodes.child_counts.size());
+  per_node("CASE", t.nodes.cases.size());
+  per_node("EDGV", t.nodes.edge_vertices.size());
+  per_node("FTRI", t.nodes.first_triangle.size());
+  per_node("NTRI", t.nodes.triangle_counts.size());
+  per_node("METR", t.nodes.metrics.size());
   if (t.depth < 0 || t.depth > 19 || t.grid.resolution != (1 << t.depth))
     bad("resolution " + std::to_string(t.grid.resolution) + " is not 2^depth for depth " + std::to_string(t.depth));
   if (!t.grid.origin.allFinite() || !std::isfinite(t.grid.cube_size) || !(t.grid.cube_size > 0))
@@ -517,7 +638,7 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
               std::to_string(v) + " of " + std::to_string(vertices));
   };
   check_triangles("TRIS", t.triangles);
-  check_triangles("PTRI", t.patch_triangles);
+  check_triangles("PTRI", t.patches.triangles);
 
   // Hole patches by group: offsets that run from 0 to the end of their array.
   auto check_offsets = [&](const char* tag, const std::vector<std::int32_t>& first, std::size_t total,
@@ -527,61 +648,71 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
       bad("section '" + std::string(tag) + "' does not run from 0 to the " + std::to_string(total) + " entries of '" +
           of + "' in order");
   };
-  if (t.patch_group_first.empty() && !t.patch_triangles.empty())
+  if (t.patches.group_first.empty() && !t.patches.triangles.empty())
     bad("patch triangles without groups ('PGRP' is empty)");
-  check_offsets("PGRP", t.patch_group_first, t.patch_triangles.size(), "PTRI");
-  if (t.patch_needs_first.size() != t.patch_group_first.size())
-    bad("section 'PNDF' has " + std::to_string(t.patch_needs_first.size()) + " entries, 'PGRP' " +
-        std::to_string(t.patch_group_first.size()));
-  check_offsets("PNDF", t.patch_needs_first, t.patch_needs.size(), "PNDS");
-  for (std::int32_t v : t.patch_needs)
+  check_offsets("PGRP", t.patches.group_first, t.patches.triangles.size(), "PTRI");
+  if (t.patches.needs_first.size() != t.patches.group_first.size())
+    bad("section 'PNDF' has " + std::to_string(t.patches.needs_first.size()) + " entries, 'PGRP' " +
+        std::to_string(t.patches.group_first.size()));
+  check_offsets("PNDF", t.patches.needs_first, t.patches.needs.size(), "PNDS");
+  for (std::int32_t v : t.patches.needs)
     if (v < 0 || std::size_t(v) >= n) bad("section 'PNDS' names node " + std::to_string(v) + " of " + std::to_string(n));
 
-  if (t.parents[0] != -1 || t.levels[0] != 0 || t.keys[0] != 0) bad("node 0 is not the root");
+}
+
+// The tree a tree, every index in range.
+std::size_t Decoder::check_nodes(const McOctree& t) const {
+  const std::size_t n = t.nodes.keys.size(), vertices = vertices_;
+  if (t.nodes.parents[0] != -1 || t.nodes.levels[0] != 0 || t.nodes.keys[0] != 0) bad("node 0 is not the root");
   std::size_t internal = 0;
   for (std::size_t i = 0; i < n; ++i) {
     auto node = [i] { return "node " + std::to_string(i) + ": "; };  // built only on failure
-    const int level = t.levels[i];
+    const int level = t.nodes.levels[i];
     if (level > t.depth) bad(node() + "level " + std::to_string(level) + " below the leaves' " + std::to_string(t.depth));
-    if (t.keys[i] >> 60) bad(node() + "key out of range");
+    if (t.nodes.keys[i] >> 60) bad(node() + "key out of range");
     int x, y, z;
-    unpack_key(t.keys[i], &x, &y, &z);
+    unpack_key(t.nodes.keys[i], &x, &y, &z);
     if (std::max({x, y, z}) >= (1 << level)) bad(node() + "key outside its level's lattice");
     if (i > 0) {
-      const std::int32_t p = t.parents[i];
+      const std::int32_t p = t.nodes.parents[i];
       if (p < 0 || std::size_t(p) >= n) bad(node() + "parent " + std::to_string(p) + " of " + std::to_string(n) + " nodes");
-      if (t.first_child[p] < 0 || std::size_t(t.first_child[p]) > i ||
-          i >= std::size_t(t.first_child[p]) + t.child_counts[p])
+      if (t.nodes.first_child[p] < 0 || std::size_t(t.nodes.first_child[p]) > i ||
+          i >= std::size_t(t.nodes.first_child[p]) + t.nodes.child_counts[p])
         bad(node() + "not among its parent " + std::to_string(p) + "'s children");
     }
-    if (t.first_child[i] < 0) {
-      if (t.child_counts[i] != 0 || level != t.depth) bad(node() + "a leaf must sit at the depth with no children");
+    if (t.nodes.first_child[i] < 0) {
+      if (t.nodes.child_counts[i] != 0 || level != t.depth) bad(node() + "a leaf must sit at the depth with no children");
     } else {
       ++internal;
-      const std::size_t first = std::size_t(t.first_child[i]);
-      if (t.child_counts[i] < 1 || t.child_counts[i] > 8 || first + t.child_counts[i] > n)
-        bad(node() + "children " + std::to_string(first) + "+" + std::to_string(t.child_counts[i]) +
+      const std::size_t first = std::size_t(t.nodes.first_child[i]);
+      if (t.nodes.child_counts[i] < 1 || t.nodes.child_counts[i] > 8 || first + t.nodes.child_counts[i] > n)
+        bad(node() + "children " + std::to_string(first) + "+" + std::to_string(t.nodes.child_counts[i]) +
             " are not 1 to 8 of the " + std::to_string(n) + " nodes");
-      for (std::size_t c = first; c < first + t.child_counts[i]; ++c) {
+      for (std::size_t c = first; c < first + t.nodes.child_counts[i]; ++c) {
         int cx, cy, cz;
-        unpack_key(t.keys[c], &cx, &cy, &cz);
-        if (t.parents[c] != std::int32_t(i) || t.levels[c] != level + 1 || cx >> 1 != x || cy >> 1 != y ||
+        unpack_key(t.nodes.keys[c], &cx, &cy, &cz);
+        if (t.nodes.parents[c] != std::int32_t(i) || t.nodes.levels[c] != level + 1 || cx >> 1 != x || cy >> 1 != y ||
             cz >> 1 != z)
           bad(node() + "child " + std::to_string(c) + " does not lie inside it on the next level");
       }
     }
-    if (t.first_triangle[i] < 0 ||
-        std::size_t(t.first_triangle[i]) + t.triangle_counts[i] > t.triangles.size())
-      bad(node() + "triangles " + std::to_string(t.first_triangle[i]) + "+" + std::to_string(t.triangle_counts[i]) +
+    if (t.nodes.first_triangle[i] < 0 ||
+        std::size_t(t.nodes.first_triangle[i]) + t.nodes.triangle_counts[i] > t.triangles.size())
+      bad(node() + "triangles " + std::to_string(t.nodes.first_triangle[i]) + "+" + std::to_string(t.nodes.triangle_counts[i]) +
           " past the " + std::to_string(t.triangles.size()) + " of 'TRIS'");
-    for (std::int32_t v : t.edge_vertices[i])
+    for (std::int32_t v : t.nodes.edge_vertices[i])
       if (v < -1 || (v >= 0 && std::size_t(v) >= vertices))
         bad(node() + "edge vertex " + std::to_string(v) + " of " + std::to_string(vertices));
   }
 
+  return internal;
+}
+
+void Decoder::check_transitions(const McOctree& t, std::size_t internal) const {
+  const std::size_t n = t.nodes.keys.size(), vertices = vertices_;
   // Crack patching (lod/transition.h): the internal nodes come first, and
   // every crossing the transition triangulation can join has a vertex.
-  const std::size_t with_transitions = t.centre_vertices.size();
+  const std::size_t with_transitions = t.transitions.centre_vertices.size();
   if (with_transitions != internal)
     bad("section 'CNTR' has " + std::to_string(with_transitions) + " entries for the " + std::to_string(internal) +
         " internal nodes");
@@ -590,9 +721,9 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
       bad("section '" + std::string(tag) + "' has " + std::to_string(count) + " entries for the " +
           std::to_string(internal) + " internal nodes");
   };
-  per_internal("BINS", t.boundary_inside.size());
-  per_internal("SUBV", t.sub_edge_vertices.size());
-  per_internal("NBRS", t.neighbours.size());
+  per_internal("BINS", t.transitions.boundary_inside.size());
+  per_internal("SUBV", t.transitions.sub_edge_vertices.size());
+  per_internal("NBRS", t.transitions.neighbours.size());
   const auto& sub_edges = transition_sub_edges();
   auto vertex_ok = [&](std::int32_t v) { return v >= -1 && (v < 0 || std::size_t(v) < vertices); };
   int corner_point[8], edge_ends[12][2];
@@ -601,36 +732,39 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
     for (int end = 0; end < 2; ++end) edge_ends[e][end] = corner_point[edge_corner(e, end)];
   for (std::size_t i = 0; i < internal; ++i) {
     auto node = [i] { return "node " + std::to_string(i) + ": "; };  // built only on failure
-    if (t.first_child[i] < 0) bad(node() + "a leaf among the first " + std::to_string(internal) + " nodes");
-    const std::uint32_t inside = t.boundary_inside[i];
+    if (t.nodes.first_child[i] < 0) bad(node() + "a leaf among the first " + std::to_string(internal) + " nodes");
+    const std::uint32_t inside = t.transitions.boundary_inside[i];
     if (inside >> 27) bad(node() + "boundary signs beyond the 27 lattice points");
     auto in = [&](int p) { return (inside >> p) & 1; };
     bool crossing = false;
     for (int c = 0; c < 8; ++c)
-      if (std::uint32_t(in(corner_point[c])) != std::uint32_t((t.cases[i] >> c) & 1))
+      if (std::uint32_t(in(corner_point[c])) != std::uint32_t((t.nodes.cases[i] >> c) & 1))
         bad(node() + "boundary signs disagree with its case at corner " + std::to_string(c));
     for (int e = 0; e < 12; ++e)
       if (in(edge_ends[e][0]) != in(edge_ends[e][1])) {
         crossing = true;
-        if (t.edge_vertices[i][e] < 0) bad(node() + "edge " + std::to_string(e) + " changes sign without a vertex");
+        if (t.nodes.edge_vertices[i][e] < 0) bad(node() + "edge " + std::to_string(e) + " changes sign without a vertex");
       }
     for (int e = 0; e < kSubEdges; ++e) {
-      const std::int32_t v = t.sub_edge_vertices[i][e];
+      const std::int32_t v = t.transitions.sub_edge_vertices[i][e];
       if (!vertex_ok(v)) bad(node() + "sub-edge vertex " + std::to_string(v) + " of " + std::to_string(vertices));
       if (in(sub_edges[e].a) != in(sub_edges[e].b)) {
         crossing = true;
         if (v < 0) bad(node() + "sub-edge " + std::to_string(e) + " changes sign without a vertex");
       }
     }
-    const std::int32_t centre = t.centre_vertices[i];
+    const std::int32_t centre = t.transitions.centre_vertices[i];
     if (!vertex_ok(centre) || (crossing && centre < 0))
       bad(node() + "centre vertex " + std::to_string(centre) + " of " + std::to_string(vertices));
-    for (std::int32_t m : t.neighbours[i])
+    for (std::int32_t m : t.transitions.neighbours[i])
       if (m < -1 || (m >= 0 && std::size_t(m) >= n)) bad(node() + "neighbour " + std::to_string(m) + " of " + std::to_string(n));
   }
 
+}
+
+void Decoder::check_lod_array(const McOctree& t, const LodArray& lod, std::size_t internal) const {
+  const std::size_t n = t.nodes.keys.size();
   // The LOD array: every internal node once, parents first (§5.2).
-  const LodArray& lod = octree_lod;
   if (lod.order.size() != internal)
     bad("the LOD array has " + std::to_string(lod.order.size()) + " entries for " + std::to_string(internal) +
         " internal nodes");
@@ -641,17 +775,50 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
   for (std::size_t k = 0; k < lod.order.size(); ++k) {
     const std::int32_t v = lod.order[k];
     auto entry = [k] { return "LOD array entry " + std::to_string(k) + ": "; };
-    if (v < 0 || std::size_t(v) >= n || t.first_child[v] < 0)
+    if (v < 0 || std::size_t(v) >= n || t.nodes.first_child[v] < 0)
       bad(entry() + "node " + std::to_string(v) + " is not an internal node");
     if (expanded[v]) bad(entry() + "node " + std::to_string(v) + " expands twice");
-    if (k == 0 ? v != 0 : !expanded[t.parents[v]]) bad(entry() + "node " + std::to_string(v) + " expands before its parent");
+    if (k == 0 ? v != 0 : !expanded[t.nodes.parents[v]]) bad(entry() + "node " + std::to_string(v) + " expands before its parent");
     expanded[v] = 1;
   }
   for (std::size_t k = 0; k < lod.accumulated.size(); ++k)
     if (lod.accumulated[k] < 0) bad("accumulation table entry " + std::to_string(k) + " is negative");
   if (lod.pinned > lod.order.size())
     bad(std::to_string(lod.pinned) + " pinned expansions of " + std::to_string(lod.order.size()));
+}
+
+LodModel Decoder::decode() {
+  read_header();
+  read_directory();
+  verify_length_and_checksums();
+  index_sections();
+  LodModel model;
+  read_part(Part::kVertices, &model);
+  vertices_ = model.vertices.size();
+  check_vertices(model);
+  const bool has_octree = major_ == 2 || by_tag_.count(fourcc("GRID"));
+  const bool has_clusters = major_ >= 3 && by_tag_.count(fourcc("CINF"));
+  if (!has_octree && !has_clusters) fail("holds no LOD structure: neither an octree ('GRID') nor clusters ('CINF')");
+  if (has_clusters) decode_clusters(&model);
+  if (!has_octree) return model;
+
+  model.octree.emplace();
+  McOctree& t = model.octree->tree;
+  read_grid(&t);
+  read_part(Part::kOctree, &model);
+  if (major_ >= kPacked) unpack_octree(records_.packed, source_, &t);
+  read_pinned(&model.octree->lod);
+  check_octree_arrays(t);
+  const std::size_t internal = check_nodes(t);
+  check_transitions(t, internal);
+  check_lod_array(t, model.octree->lod, internal);
   return model;
+}
+
+}  // namespace
+
+LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& source) {
+  return Decoder(data, size, source).decode();
 }
 
 }  // namespace scan2lod

@@ -68,7 +68,7 @@ TEST(McOctree, FullDetailIsTheMarchingCubesMesh) {
   // Same vertex positions: the octree's vertex array starts with the mesh's.
   ASSERT_EQ(m.tree.mesh_vertices, m.reconstruction.mesh.positions.size());
   for (std::size_t v = 0; v < m.tree.mesh_vertices; ++v)
-    ASSERT_EQ(m.tree.positions[v], m.reconstruction.mesh.positions[v]);
+    ASSERT_EQ(m.tree.vertices.positions[v], m.reconstruction.mesh.positions[v]);
 }
 
 TEST(McOctree, ParentsShareTheLeavesVertices) {
@@ -77,7 +77,7 @@ TEST(McOctree, ParentsShareTheLeavesVertices) {
   std::size_t coarse = 0, shared = 0;
   for (std::size_t n = 0; n < m.tree.size(); ++n) {
     if (m.tree.is_leaf(n)) continue;
-    for (std::int32_t v : m.tree.edge_vertices[n]) {
+    for (std::int32_t v : m.tree.nodes.edge_vertices[n]) {
       if (v < 0) continue;
       ++coarse;
       shared += std::size_t(v) < m.tree.mesh_vertices;
@@ -99,7 +99,7 @@ TEST(LodArray, EveryNodeExpandsOnceParentsFirst) {
   for (std::size_t i = 1; i < m.lod.order.size(); ++i) {
     const std::int32_t n = m.lod.order[i];
     ASSERT_EQ(seen[n]++, 0);
-    ASSERT_TRUE(expanded[m.tree.parents[n]]) << "node expanded before its parent";
+    ASSERT_TRUE(expanded[m.tree.nodes.parents[n]]) << "node expanded before its parent";
     expanded[n] = 1;
   }
 }
@@ -110,7 +110,7 @@ TEST(LodArray, NeighboursDifferByAtMostOneLevelInEveryPrefix) {
   const Model& m = bunny64();
   const McOctree& t = m.tree;
   std::map<std::pair<int, std::uint64_t>, std::int32_t> node_at;
-  for (std::size_t n = 0; n < t.size(); ++n) node_at[{t.levels[n], t.keys[n]}] = std::int32_t(n);
+  for (std::size_t n = 0; n < t.size(); ++n) node_at[{t.nodes.levels[n], t.nodes.keys[n]}] = std::int32_t(n);
   std::vector<std::uint8_t> in_cut(t.size(), 0), expanded(t.size(), 0);
   in_cut[0] = 1;
   auto covering_level = [&](int level, int x, int y, int z) {
@@ -128,19 +128,19 @@ TEST(LodArray, NeighboursDifferByAtMostOneLevelInEveryPrefix) {
     const std::int32_t n = m.lod.order[i];
     in_cut[n] = 0;
     expanded[n] = 1;
-    for (int c = 0; c < t.child_counts[n]; ++c) in_cut[t.first_child[n] + c] = 1;
-    for (int c = 0; c < t.child_counts[n]; ++c) {
-      const std::int32_t child = t.first_child[n] + c;
+    for (int c = 0; c < t.nodes.child_counts[n]; ++c) in_cut[t.nodes.first_child[n] + c] = 1;
+    for (int c = 0; c < t.nodes.child_counts[n]; ++c) {
+      const std::int32_t child = t.nodes.first_child[n] + c;
       int x, y, z;
-      unpack_key(t.keys[child], &x, &y, &z);
-      const int side = 1 << t.levels[child];
+      unpack_key(t.nodes.keys[child], &x, &y, &z);
+      const int side = 1 << t.nodes.levels[child];
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
             if (x + dx < 0 || y + dy < 0 || z + dz < 0 || x + dx >= side || y + dy >= side || z + dz >= side) continue;
-            const int level = covering_level(t.levels[child], x + dx, y + dy, z + dz);
-            ASSERT_TRUE(level < 0 || level >= t.levels[child] - 1)
-                << "prefix " << i + 1 << ": a level-" << int(t.levels[child]) << " node beside a level-" << level << " node";
+            const int level = covering_level(t.nodes.levels[child], x + dx, y + dy, z + dz);
+            ASSERT_TRUE(level < 0 || level >= t.nodes.levels[child] - 1)
+                << "prefix " << i + 1 << ": a level-" << int(t.nodes.levels[child]) << " node beside a level-" << level << " node";
           }
     }
   }

@@ -80,8 +80,8 @@ std::size_t emission_bound(const McOctree& tree, const LodArray& lod, std::size_
   std::size_t bound = 0;
   for (std::size_t i = std::min(a, b); i < std::max(a, b); ++i) {
     const std::int32_t node = lod.order[i];
-    bound += b > a ? tree.child_counts[std::size_t(node)] : 1;
-    for (int c = 0; c < 27; ++c) bound += splits(c) && tree.neighbours[std::size_t(node)][std::size_t(c)] >= 0;
+    bound += b > a ? tree.nodes.child_counts[std::size_t(node)] : 1;
+    for (int c = 0; c < 27; ++c) bound += splits(c) && tree.transitions.neighbours[std::size_t(node)][std::size_t(c)] >= 0;
   }
   return bound;
 }
@@ -93,7 +93,7 @@ std::size_t cut_size(const McOctree& tree, const LodArray& lod, std::size_t prio
   for (std::size_t i = 0; i < priority; ++i) expanded[std::size_t(lod.order[i])] = 1;
   std::size_t n = 0;
   for (std::size_t node = 1; node < tree.size(); ++node)
-    n += !expanded[node] && expanded[std::size_t(tree.parents[node])];
+    n += !expanded[node] && expanded[std::size_t(tree.nodes.parents[node])];
   return n;
 }
 
@@ -160,7 +160,7 @@ TEST(LodCursor, RandomMovesGiveExtractLodsTrianglesOnTheBunny) {
   ASSERT_GT(m.tree.patch_groups(), 0u);  // hole patches show and hide on the way
   expect_moves_match_extraction(m, random_targets(m.lod.full(), 1));
   // In a model the tree keeps no vertices: the buffer indexes the model's.
-  EXPECT_TRUE(m.tree.positions.empty());
+  EXPECT_TRUE(m.tree.vertices.positions.empty());
   const std::size_t vertices = bunny_lod_model().vertices.size();
   LodCursor cursor(m.tree, m.lod);
   for (const std::size_t p : {m.lod.full(), m.lod.full() / 2, std::size_t(0)}) {

@@ -229,27 +229,27 @@ TEST(ModelFile, RoundTripKeepsEveryArrayAndEveryLevelOfDetail) {
   EXPECT_EQ(a.grid.resolution, b.grid.resolution);
   EXPECT_EQ(a.depth, b.depth);
   EXPECT_EQ(a.mesh_vertices, b.mesh_vertices);
-  EXPECT_EQ(a.keys, b.keys);
-  EXPECT_EQ(a.levels, b.levels);
-  EXPECT_EQ(a.parents, b.parents);
-  EXPECT_EQ(a.first_child, b.first_child);
-  EXPECT_EQ(a.child_counts, b.child_counts);
-  EXPECT_EQ(a.cases, b.cases);
-  EXPECT_EQ(a.edge_vertices, b.edge_vertices);
-  EXPECT_EQ(a.first_triangle, b.first_triangle);
-  EXPECT_EQ(a.triangle_counts, b.triangle_counts);
-  EXPECT_EQ(a.metrics, b.metrics);
-  EXPECT_EQ(a.boundary_inside, b.boundary_inside);
-  EXPECT_EQ(a.sub_edge_vertices, b.sub_edge_vertices);
-  EXPECT_EQ(a.centre_vertices, b.centre_vertices);
-  EXPECT_EQ(a.neighbours, b.neighbours);
+  EXPECT_EQ(a.nodes.keys, b.nodes.keys);
+  EXPECT_EQ(a.nodes.levels, b.nodes.levels);
+  EXPECT_EQ(a.nodes.parents, b.nodes.parents);
+  EXPECT_EQ(a.nodes.first_child, b.nodes.first_child);
+  EXPECT_EQ(a.nodes.child_counts, b.nodes.child_counts);
+  EXPECT_EQ(a.nodes.cases, b.nodes.cases);
+  EXPECT_EQ(a.nodes.edge_vertices, b.nodes.edge_vertices);
+  EXPECT_EQ(a.nodes.first_triangle, b.nodes.first_triangle);
+  EXPECT_EQ(a.nodes.triangle_counts, b.nodes.triangle_counts);
+  EXPECT_EQ(a.nodes.metrics, b.nodes.metrics);
+  EXPECT_EQ(a.transitions.boundary_inside, b.transitions.boundary_inside);
+  EXPECT_EQ(a.transitions.sub_edge_vertices, b.transitions.sub_edge_vertices);
+  EXPECT_EQ(a.transitions.centre_vertices, b.transitions.centre_vertices);
+  EXPECT_EQ(a.transitions.neighbours, b.transitions.neighbours);
   EXPECT_EQ(a.triangles, b.triangles);
-  EXPECT_EQ(a.patch_triangles, b.patch_triangles);
-  EXPECT_EQ(a.patch_group_first, b.patch_group_first);
-  EXPECT_EQ(a.patch_needs_first, b.patch_needs_first);
-  EXPECT_EQ(a.patch_needs, b.patch_needs);
+  EXPECT_EQ(a.patches.triangles, b.patches.triangles);
+  EXPECT_EQ(a.patches.group_first, b.patches.group_first);
+  EXPECT_EQ(a.patches.needs_first, b.patches.needs_first);
+  EXPECT_EQ(a.patches.needs, b.patches.needs);
   // The tree's own vertex arrays stay empty in a model: its vertices are the model's.
-  EXPECT_TRUE(b.positions.empty() && b.normals.empty() && b.colors.empty());
+  EXPECT_TRUE(b.vertices.positions.empty() && b.vertices.normals.empty() && b.vertices.colors.empty());
   EXPECT_FALSE(m.vertices.positions.empty());
   EXPECT_EQ(m.vertices.positions, l.vertices.positions);
   EXPECT_EQ(m.vertices.normals, l.vertices.normals);
@@ -327,9 +327,9 @@ TEST(ModelFile, FlippedBytesAreCaughtByChecksums) {
       EXPECT_NE(error.find("checksum mismatch"), std::string::npos) << p << ": " << error;
   }
   // A flip inside a payload names its section.
-  const std::size_t keys_offset = std::size_t(payload_offset(bytes, tag("KEYS")));
-  bytes[keys_offset + 5] ^= 0x10;
-  EXPECT_NE(error_of(bytes.data(), bytes.size()).find("checksum mismatch in section 'KEYS'"), std::string::npos);
+  const std::size_t edges_offset = std::size_t(payload_offset(bytes, tag("EDGP")));
+  bytes[edges_offset + 5] ^= 0x10;
+  EXPECT_NE(error_of(bytes.data(), bytes.size()).find("checksum mismatch in section 'EDGP'"), std::string::npos);
 }
 
 TEST(ModelFile, NewerMajorVersionIsRejectedAsNewer) {
@@ -359,13 +359,13 @@ TEST(ModelFile, NewerMinorVersionsAddSectionsOldReadersSkip) {
   // A known section missing or twice.
   sections.erase(sections.begin() + 3);
   std::vector<RawSection> missing = sections, twice = sections;
-  const std::size_t levl = index_of(sections, tag("LEVL"));
+  const std::size_t levl = index_of(sections, tag("CASE"));
   missing.erase(missing.begin() + std::ptrdiff_t(levl));
   twice.push_back(twice[levl]);
   std::vector<std::uint8_t> b = join(missing, kModelFormatMajor, kModelFormatMinor);
-  EXPECT_NE(error_of(b.data(), b.size()).find("missing section 'LEVL'"), std::string::npos) << error_of(b.data(), b.size());
+  EXPECT_NE(error_of(b.data(), b.size()).find("missing section 'CASE'"), std::string::npos) << error_of(b.data(), b.size());
   b = join(twice, kModelFormatMajor, kModelFormatMinor);
-  EXPECT_NE(error_of(b.data(), b.size()).find("'LEVL' appears twice"), std::string::npos);
+  EXPECT_NE(error_of(b.data(), b.size()).find("'CASE' appears twice"), std::string::npos);
 }
 
 TEST(ModelFile, BadMagicIsNotAModel) {
@@ -400,29 +400,29 @@ TEST(ModelFile, CraftedContentsAreRejectedBeforeExtraction) {
   std::int32_t leaf = 0;
   while (!tree.is_leaf(std::size_t(leaf))) ++leaf;
   const std::vector<Case> cases = {
-      {"a per-node array one short", "'LEVL' has", [](LodModel& l) { l.octree->tree.levels.pop_back(); }},
+      {"a per-node array one short", "'LEVL' has", [](LodModel& l) { l.octree->tree.nodes.levels.pop_back(); }},
       {"children past the nodes", "children", [n](LodModel& l) {
-         l.octree->tree.first_child[1] = n - 1;
-         l.octree->tree.child_counts[1] = 8;
+         l.octree->tree.nodes.first_child[1] = n - 1;
+         l.octree->tree.nodes.child_counts[1] = 8;
        }},
-      {"a parent out of range", "child 5 does not lie inside it", [n](LodModel& l) { l.octree->tree.parents[5] = n + 100; }},
+      {"a parent out of range", "child 5 does not lie inside it", [n](LodModel& l) { l.octree->tree.nodes.parents[5] = n + 100; }},
       {"a triangle range past TRIS", "triangles", [](LodModel& l) {
-         l.octree->tree.first_triangle.back() = std::int32_t(l.octree->tree.triangles.size());
-         l.octree->tree.triangle_counts.back() = 1;
+         l.octree->tree.nodes.first_triangle.back() = std::int32_t(l.octree->tree.triangles.size());
+         l.octree->tree.nodes.triangle_counts.back() = 1;
        }},
       {"a triangle naming a missing vertex", "names vertex", [vertices](LodModel& l) { l.octree->tree.triangles[7][1] = vertices; }},
       {"a negative vertex in a patch", "'PTRI'", [](LodModel& l) {
-         l.octree->tree.patch_triangles.push_back({0, -3, 1});
+         l.octree->tree.patches.triangles.push_back({0, -3, 1});
        }},
-      {"an edge vertex out of range", "edge vertex", [vertices](LodModel& l) { l.octree->tree.edge_vertices.back()[0] = vertices; }},
-      {"a neighbour out of range", "neighbour", [n](LodModel& l) { l.octree->tree.neighbours[2][4] = n; }},
+      {"an edge vertex out of range", "edge vertex", [vertices](LodModel& l) { l.octree->tree.nodes.edge_vertices.back()[0] = vertices; }},
+      {"a neighbour out of range", "neighbour", [n](LodModel& l) { l.octree->tree.transitions.neighbours[2][4] = n; }},
       {"a crossing without a vertex", "without a vertex", [](LodModel& l) {
-         for (auto& s : l.octree->tree.sub_edge_vertices) s.fill(-1);
+         for (auto& s : l.octree->tree.transitions.sub_edge_vertices) s.fill(-1);
        }},
-      {"a patch group past the patches", "'PGRP'", [](LodModel& l) { l.octree->tree.patch_group_first.back() += 1; }},
+      {"a patch group past the patches", "'PGRP'", [](LodModel& l) { l.octree->tree.patches.group_first.back() += 1; }},
       {"a patch needing a missing node", "'PNDS' names node", [n](LodModel& l) {
-         l.octree->tree.patch_needs.push_back(n);
-         l.octree->tree.patch_needs_first.back() += 1;
+         l.octree->tree.patches.needs.push_back(n);
+         l.octree->tree.patches.needs_first.back() += 1;
        }},
       {"normals for too few vertices", "normals", [](LodModel& l) { l.vertices.normals.pop_back(); }},
       {"a leaf in the LOD array", "not an internal node", [leaf](LodModel& l) { l.octree->lod.order[3] = leaf; }},
@@ -436,25 +436,26 @@ TEST(ModelFile, CraftedContentsAreRejectedBeforeExtraction) {
   for (const Case& c : cases) {
     LodModel crafted = m;
     c.craft(crafted);
-    const std::vector<std::uint8_t> bytes = encode_model(crafted);
+    // In format 3, which stores these arrays whole (format 4 derives most).
+    const std::vector<std::uint8_t> bytes = encode_model(crafted, 3);
     const std::string error = error_of(bytes.data(), bytes.size());
     EXPECT_NE(error.find("inconsistent model"), std::string::npos) << c.what << ": " << error;
     EXPECT_NE(error.find(c.expect), std::string::npos) << c.what << ": " << error;
   }
   // Huge counts are refused by the file's size, before any allocation.
   std::vector<RawSection> sections = split(bunny64_bytes());
-  sections[index_of(sections, tag("KEYS"))].count = std::uint64_t(1) << 61;  // 2^64 bytes: overflows
+  sections[index_of(sections, tag("EDGP"))].count = std::uint64_t(1) << 62;  // 2^64 bytes: overflows
   std::vector<std::uint8_t> huge = join(sections, kModelFormatMajor, kModelFormatMinor);
   std::string error = error_of(huge.data(), huge.size());
-  EXPECT_NE(error.find("section 'KEYS': 2305843009213693952 elements of 8 bytes"), std::string::npos) << error;
+  EXPECT_NE(error.find("section 'EDGP': 4611686018427387904 elements of 4 bytes"), std::string::npos) << error;
   huge = bunny64_bytes();
-  const std::size_t keys = 40 + 48 * index_of(huge, tag("KEYS"));
-  set_u64(&huge, keys + 16, std::uint64_t(1) << 40);
+  const std::size_t keys = 40 + 48 * index_of(huge, tag("EDGP"));
+  set_u64(&huge, keys + 16, std::uint64_t(1) << 41);
   set_u64(&huge, keys + 32, std::uint64_t(1) << 43);
   const std::size_t directory = 48 * std::size_t(u32_at(huge, 16));
   set_u64(&huge, 40 + directory, model_checksum(huge.data() + 40, directory));
   error = error_of(huge.data(), huge.size());
-  EXPECT_NE(error.find("section 'KEYS': its 8796093022208 bytes"), std::string::npos) << error;
+  EXPECT_NE(error.find("section 'EDGP': its 8796093022208 bytes"), std::string::npos) << error;
   EXPECT_NE(error.find("outside"), std::string::npos) << error;
 }
 
@@ -509,7 +510,7 @@ TEST(ModelFile, Format2FilesOfAnOctreeStillLoad) {
   LodModel octree_only = bunny64();
   octree_only.clusters.reset();
   octree_only.cluster_vertex_first = octree_only.cluster_vertex_count = 0;
-  const std::vector<std::uint8_t> current = encode_model(octree_only);
+  const std::vector<std::uint8_t> current = encode_model(octree_only, 3);
   for (const std::uint32_t minor : {0u, 1u}) {
     std::vector<std::uint8_t> old = with_major(current, 2);
     set_u32(&old, 12, minor);
@@ -530,7 +531,7 @@ TEST(ModelFile, Format2FilesOfAnOctreeStillLoad) {
     for (double percent : {0.0, 25.0, 100.0})
       EXPECT_EQ(extract(*l.octree, percent), extract(octree(), percent)) << percent << "%";
     // Written again, it is a 3.0 file of the same model.
-    EXPECT_EQ(encode_model(l), current);
+    EXPECT_EQ(encode_model(l, 3), current);
   }
   // 1.x is refused even when its sections are those of a good 2.x file.
   const std::vector<std::uint8_t> one = with_major(current, 1);
@@ -720,13 +721,69 @@ TEST(ModelFile, CraftedClusterHierarchiesAreRejectedBeforeExtraction) {
       << error_of(narrow.data(), narrow.size());
 }
 
-TEST(ModelFile, Format4IsRefusedAsNewer) {
-  static_assert(kModelFormatMajor == 3, "this reader writes format 3");
-  const std::vector<std::uint8_t> four = with_major(bunny64_bytes(), 4);
-  const std::string error = error_of(four.data(), four.size());
+TEST(ModelFile, Format5IsRefusedAsNewer) {
+  static_assert(kModelFormatMajor == 4, "this reader writes format 4");
+  const std::vector<std::uint8_t> five = with_major(bunny64_bytes(), 5);
+  const std::string error = error_of(five.data(), five.size());
   EXPECT_NE(error.find("newer"), std::string::npos) << error;
-  EXPECT_NE(error.find("format 4.0"), std::string::npos) << error;
-  EXPECT_NE(error.find("reads up to 3"), std::string::npos) << error;
+  EXPECT_NE(error.find("format 5.0"), std::string::npos) << error;
+  EXPECT_NE(error.find("reads up to 4"), std::string::npos) << error;
   // Before anything past the header is looked at.
-  EXPECT_NE(error_of(four.data(), 40).find("newer"), std::string::npos);
+  EXPECT_NE(error_of(five.data(), 40).find("newer"), std::string::npos);
+}
+
+// Format 4 packs the octree (lod/model_pack.h) and derives the rest at load
+// time: the same model as format 3 holds, in under a third of the bytes.
+TEST(ModelFile, Format4PacksTheOctreeAndHoldsTheSameModelAsFormat3) {
+  const std::vector<std::uint8_t> three = encode_model(bunny64(), 3);
+  const std::vector<std::uint8_t>& four = bunny64_bytes();
+  EXPECT_EQ(u32_at(three, 8), 3u);
+  EXPECT_EQ(u32_at(four, 8), 4u);
+  // Either file read and written again in the other format gives that format's bytes.
+  EXPECT_EQ(encode_model(decode_model(three.data(), three.size(), "three.mco")), four);
+  EXPECT_EQ(encode_model(decode_model(four.data(), four.size(), "four.mco"), 3), three);
+  // The octree's sections (all but the shared vertices and the clusters').
+  auto octree_bytes = [](const std::vector<std::uint8_t>& b) {
+    std::uint64_t total = 0;
+    for (const RawSection& s : split(b))
+      if (s.tag != tag("POSN") && s.tag != tag("NRML") && s.tag != tag("COLR") && s.tag != tag("CINF") &&
+          s.tag != tag("CLUS") && s.tag != tag("CTRI") && s.tag != tag("CGRP"))
+        total += s.payload.size();
+    return total;
+  };
+  EXPECT_LT(3 * octree_bytes(four), octree_bytes(three)) << octree_bytes(four) << " against " << octree_bytes(three);
+  for (const char* gone : {"KEYS", "LEVL", "PRNT", "FCHD", "NCHD", "EDGV", "FTRI", "NTRI", "SUBV", "NBRS", "TRIS"})
+    for (const RawSection& s : split(four)) EXPECT_NE(s.tag, tag(*reinterpret_cast<const char(*)[5]>(gone))) << gone;
+}
+
+TEST(ModelFile, CraftedPackedSectionsAreRejectedBeforeExtraction) {
+  struct Case {
+    const char* what;
+    const char* section;
+    std::string expect;
+    std::function<void(RawSection&)> craft;
+  };
+  const std::vector<Case> cases = {
+      {"an edge vertex missing", "EDGP", "holds fewer vertices than 'EDGM' names",
+       [](RawSection& s) { s.payload.resize(s.payload.size() - 4), --s.count; }},
+      {"an edge vertex too many", "EDGP", "'EDGM' names",
+       [](RawSection& s) { s.payload.insert(s.payload.end(), 4, 0), ++s.count; }},
+      {"an edge mask past 12 edges", "EDGM", "names an edge past 12", [](RawSection& s) { s.payload[1] |= 0x80; }},
+      {"a sub-edge vertex missing", "SUBP", "holds fewer vertices than 'SUBM' names",
+       [](RawSection& s) { s.payload.resize(s.payload.size() - 4), --s.count; }},
+      {"a leaf with children", "CHLD", "section 'CHLD'", [](RawSection& s) { s.payload.back() = 1; }},
+      {"a node that is no node's child", "CHLD", "section 'CHLD'", [](RawSection& s) { s.payload[0] = 0; }},
+      {"a triangle its case lacks", "TMSK", "names a triangle its case lacks", [](RawSection& s) {
+         for (std::uint8_t& m : s.payload) m = 0xff;
+       }},
+      {"a case array one short", "CASE", "'CASE' has", [](RawSection& s) { s.payload.pop_back(), --s.count; }},
+  };
+  for (const Case& c : cases) {
+    std::vector<RawSection> sections = split(bunny64_bytes());
+    c.craft(sections[index_of(sections, tag(*reinterpret_cast<const char(*)[5]>(c.section)))]);
+    const std::vector<std::uint8_t> bytes = join(sections, kModelFormatMajor, kModelFormatMinor);
+    const std::string error = error_of(bytes.data(), bytes.size());
+    EXPECT_NE(error.find("inconsistent model"), std::string::npos) << c.what << ": " << error;
+    EXPECT_NE(error.find(c.expect), std::string::npos) << c.what << ": " << error;
+  }
 }

@@ -135,7 +135,7 @@ TEST(VisualizeLevels, TheCutCoversTheSurfaceOnceAtEveryPriority) {
       if (!t.is_leaf(n)) continue;
       ++leaves;
       int hits = 0;
-      for (std::int64_t a = std::int64_t(n); a >= 0; a = t.parents[std::size_t(a)]) hits += covered[std::size_t(a)];
+      for (std::int64_t a = std::int64_t(n); a >= 0; a = t.nodes.parents[std::size_t(a)]) hits += covered[std::size_t(a)];
       ASSERT_EQ(hits, 1) << "leaf " << n << " at priority " << p;
     }
     if (p == 0) EXPECT_EQ(cut, std::vector<std::int32_t>{0});

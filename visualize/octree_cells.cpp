@@ -23,7 +23,7 @@ std::vector<std::int32_t> lod_cut(const McOctree& tree, const LodArray& lod, std
   std::vector<std::uint8_t> expanded(tree.size(), 0);
   for (std::size_t i = 0; i < priority; ++i) expanded[std::size_t(lod.order[i])] = 1;
   for (std::size_t n = 1; n < tree.size(); ++n)
-    if (!expanded[n] && tree.parents[n] >= 0 && expanded[std::size_t(tree.parents[n])]) cut.push_back(std::int32_t(n));
+    if (!expanded[n] && tree.nodes.parents[n] >= 0 && expanded[std::size_t(tree.nodes.parents[n])]) cut.push_back(std::int32_t(n));
   return cut;
 }
 
@@ -46,8 +46,8 @@ vtkSmartPointer<vtkPolyData> cell_outlines(const McOctree& tree, const std::vect
   for (std::size_t i = 0; i < nodes.size(); ++i) {
     const std::size_t n = std::size_t(nodes[i]);
     int x, y, z;
-    unpack_key(tree.keys[n], &x, &y, &z);
-    const std::int64_t scale = std::int64_t(1) << (tree.depth - tree.levels[n]);  // leaf cubes per side
+    unpack_key(tree.nodes.keys[n], &x, &y, &z);
+    const std::int64_t scale = std::int64_t(1) << (tree.depth - tree.nodes.levels[n]);  // leaf cubes per side
     for (int k = 0; k < 8; ++k) {
       const Vec3f q = tree.grid.corner_position((x + (k & 1)) * scale, (y + ((k >> 1) & 1)) * scale,
                                                 (z + ((k >> 2) & 1)) * scale);
@@ -60,7 +60,7 @@ vtkSmartPointer<vtkPolyData> cell_outlines(const McOctree& tree, const std::vect
       o[cell] = std::int32_t(2 * cell);
       c[2 * cell + 0] = std::int32_t(8 * i + kEdges[e][0]);
       c[2 * cell + 1] = std::int32_t(8 * i + kEdges[e][1]);
-      levels->SetValue(vtkIdType(cell), tree.levels[n]);
+      levels->SetValue(vtkIdType(cell), tree.nodes.levels[n]);
     }
   }
   o[12 * nodes.size()] = std::int32_t(24 * nodes.size());
@@ -91,7 +91,7 @@ OctreeSeries octree_series(const LodModel& model) {
   const McOctree& tree = model.octree->tree;
   const LodArray& lod = model.octree->lod;
   s.metric.reserve(lod.full());
-  for (std::size_t i = 0; i < lod.full(); ++i) s.metric.push_back(double(tree.metrics[std::size_t(lod.order[i])]));
+  for (std::size_t i = 0; i < lod.full(); ++i) s.metric.push_back(double(tree.nodes.metrics[std::size_t(lod.order[i])]));
   s.triangles.assign(lod.accumulated.begin(), lod.accumulated.end());
   return s;
 }

@@ -448,28 +448,28 @@ struct Level {
 TriangleMesh open_cut(const LodModel& model, std::int64_t target, std::size_t* priority) {
   const McOctree& tree = model.octree->tree;
   const LodArray& lod = model.octree->lod;
-  std::int64_t count = tree.triangle_counts[0];
+  std::int64_t count = tree.nodes.triangle_counts[0];
   std::size_t p = 0;
   for (; p < lod.full() && count < target; ++p) {
     const std::int32_t node = lod.order[p];
-    count -= tree.triangle_counts[node];
-    for (int c = 0; c < tree.child_counts[node]; ++c) count += tree.triangle_counts[tree.first_child[node] + c];
+    count -= tree.nodes.triangle_counts[node];
+    for (int c = 0; c < tree.nodes.child_counts[node]; ++c) count += tree.nodes.triangle_counts[tree.nodes.first_child[node] + c];
   }
   std::vector<std::uint8_t> flags(tree.size(), 0);
   mark_cut(tree, lod, p, flags.data());
   std::vector<Triangle> triangles;
   for (std::size_t n = 0; n < tree.size(); ++n)
     if (flags[n] == 2) {
-      const Triangle* own = tree.triangles.data() + tree.first_triangle[n];
-      triangles.insert(triangles.end(), own, own + tree.triangle_counts[n]);
+      const Triangle* own = tree.triangles.data() + tree.nodes.first_triangle[n];
+      triangles.insert(triangles.end(), own, own + tree.nodes.triangle_counts[n]);
     }
   for (std::size_t g = 0; g < tree.patch_groups(); ++g) {
     bool shown = true;
-    for (std::int32_t k = tree.patch_needs_first[g]; k < tree.patch_needs_first[g + 1]; ++k)
-      shown = shown && flags[tree.patch_needs[k]] == 1;
+    for (std::int32_t k = tree.patches.needs_first[g]; k < tree.patches.needs_first[g + 1]; ++k)
+      shown = shown && flags[tree.patches.needs[k]] == 1;
     if (shown)
-      triangles.insert(triangles.end(), tree.patch_triangles.begin() + tree.patch_group_first[g],
-                       tree.patch_triangles.begin() + tree.patch_group_first[g + 1]);
+      triangles.insert(triangles.end(), tree.patches.triangles.begin() + tree.patches.group_first[g],
+                       tree.patches.triangles.begin() + tree.patches.group_first[g + 1]);
   }
   *priority = p;
   return compact_level(model, triangles);

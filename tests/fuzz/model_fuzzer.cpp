@@ -124,25 +124,25 @@ void apply(LodModel& m, const std::uint8_t* op) {
   ClusterHierarchy* h = m.clusters ? &*m.clusters : nullptr;
   switch (kind) {
     // The octree's arrays.
-    case 0: edit(t->keys, index, value); break;
-    case 1: edit(t->levels, index, value); break;
-    case 2: edit(t->parents, index, value); break;
-    case 3: edit(t->first_child, index, value); break;
-    case 4: edit(t->child_counts, index, value); break;
-    case 5: edit(t->cases, index, value); break;
-    case 6: edit(t->edge_vertices, index, value); break;
-    case 7: edit(t->first_triangle, index, value); break;
-    case 8: edit(t->triangle_counts, index, value); break;
-    case 9: edit(t->metrics, index, value); break;
-    case 10: edit(t->boundary_inside, index, value); break;
-    case 11: edit(t->sub_edge_vertices, index, value); break;
-    case 12: edit(t->centre_vertices, index, value); break;
-    case 13: edit(t->neighbours, index, value); break;
+    case 0: edit(t->nodes.keys, index, value); break;
+    case 1: edit(t->nodes.levels, index, value); break;
+    case 2: edit(t->nodes.parents, index, value); break;
+    case 3: edit(t->nodes.first_child, index, value); break;
+    case 4: edit(t->nodes.child_counts, index, value); break;
+    case 5: edit(t->nodes.cases, index, value); break;
+    case 6: edit(t->nodes.edge_vertices, index, value); break;
+    case 7: edit(t->nodes.first_triangle, index, value); break;
+    case 8: edit(t->nodes.triangle_counts, index, value); break;
+    case 9: edit(t->nodes.metrics, index, value); break;
+    case 10: edit(t->transitions.boundary_inside, index, value); break;
+    case 11: edit(t->transitions.sub_edge_vertices, index, value); break;
+    case 12: edit(t->transitions.centre_vertices, index, value); break;
+    case 13: edit(t->transitions.neighbours, index, value); break;
     case 14: edit(t->triangles, index, value); break;
-    case 15: edit(t->patch_triangles, index, value); break;
-    case 16: edit(t->patch_group_first, index, value); break;
-    case 17: edit(t->patch_needs_first, index, value); break;
-    case 18: edit(t->patch_needs, index, value); break;
+    case 15: edit(t->patches.triangles, index, value); break;
+    case 16: edit(t->patches.group_first, index, value); break;
+    case 17: edit(t->patches.needs_first, index, value); break;
+    case 18: edit(t->patches.needs, index, value); break;
     case 19: {  // the cube size, as a chosen float
       float f;
       std::memcpy(&f, &value, 4);
@@ -259,7 +259,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (data[0] == 'S') {
     LodModel m = seed();
     for (std::size_t at = 1; at + 9 <= size; at += 9) apply(m, data + at);
-    bytes = encode_model(m);
+    // Format 3 stores every array whole, so each edit reaches the reader
+    // (format 4 derives most of them; raw 'R' entries reach its packing).
+    bytes = encode_model(m, 3);
   } else if (data[0] == 'R') {
     bytes.assign(data + 1, data + size);
     fix_checksums(bytes);
