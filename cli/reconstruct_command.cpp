@@ -31,8 +31,7 @@ void add_reconstruct_command(CLI::App& app) {
     const auto start = clock::now();
     const ReconstructOptions& options = args->flags.resolve();
     check_mesh_output(args->output);
-    AcquisitionOptions acquisition;
-    acquisition.threads = options.threads;
+    const AcquisitionOptions& acquisition = args->flags.acquisition;
     OrientedPoints points = load_oriented_points(args->inputs, acquisition);
     const double read_seconds = std::chrono::duration<double>(clock::now() - start).count();
     Reconstruction r = reconstruct(points, options);
