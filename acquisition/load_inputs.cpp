@@ -1,20 +1,23 @@
 #include "acquisition/load_inputs.h"
 
+#include "acquisition/cloud_normals.h"
 #include "acquisition/mesh_points.h"
 #include "acquisition/organized_pcd.h"
+#include "acquisition/point_cloud_files.h"
 #include "acquisition/range_grid_ply.h"
 #include "core/error.h"
 #include "core/parallel_jobs.h"
 #include "io/mesh_file.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 namespace scan2lod {
 namespace {
 
-enum class Kind { conf, range_grid, pcd, mesh };
+enum class Kind { conf, range_grid, pcd, cloud, mesh };
 
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
@@ -22,14 +25,22 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
-bool ply_has_range_grid(const std::string& path) {
+enum class PlyKind { range_grid, mesh, cloud };
+
+// A PLY with a range grid is a scan, one with faces a mesh, one with neither a point cloud.
+PlyKind ply_kind(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
+  bool faces = false;
   for (int n = 0; n < 10000 && std::getline(in, line); ++n) {
-    if (line.rfind("element range_grid", 0) == 0) return true;
+    if (line.rfind("element range_grid", 0) == 0) return PlyKind::range_grid;
+    if (line.rfind("element face", 0) == 0) {
+      long long count = 0;
+      faces |= std::sscanf(line.c_str(), "element face %lld", &count) == 1 && count > 0;
+    }
     if (line.rfind("end_header", 0) == 0) break;
   }
-  return false;
+  return faces ? PlyKind::mesh : PlyKind::cloud;
 }
 
 Kind classify(const std::string& path) {
@@ -39,11 +50,63 @@ Kind classify(const std::string& path) {
     throw InputError(path, "is a folder; name its .conf or its scan files");
   std::string ext = lower_extension(path);
   if (ext == ".conf") return Kind::conf;
-  if (ext == ".pcd") return Kind::pcd;
-  if (ext == ".ply") return ply_has_range_grid(path) ? Kind::range_grid : Kind::mesh;
+  if (ext == ".pcd") return pcd_is_organized(path) ? Kind::pcd : Kind::cloud;
+  if (ext == ".ply") {
+    const PlyKind kind = ply_kind(path);
+    return kind == PlyKind::range_grid ? Kind::range_grid : kind == PlyKind::mesh ? Kind::mesh : Kind::cloud;
+  }
+  if (ext == ".xyz" || ext == ".pts" || ext == ".xyzn" || ext == ".xyzrgb") return Kind::cloud;
   if (ext == ".obj" || ext == ".off" || ext == ".stl") return Kind::mesh;
   throw InputError(path, "unknown input type '" + ext +
-                             "': expected .conf, .ply, .pcd, .obj, .off or .stl");
+                             "': expected .conf, .ply, .pcd, .xyz, .pts, .obj, .off or .stl");
+}
+
+PointCloud read_point_cloud(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  if (ext == ".pcd") return read_unorganized_pcd(path);
+  if (ext == ".ply") return read_point_cloud_ply(path);
+  return read_point_cloud_text(path);
+}
+
+// The .conf beside the first scan that lists every one of the scans, if any.
+std::string conf_listing(const std::vector<std::string>& scans) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path folder = fs::absolute(scans.front(), ec).parent_path();
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    if (lower_extension(it->path().string()) != ".conf") continue;
+    std::vector<ConfEntry> entries;
+    try {
+      entries = read_conf(it->path().string());
+    } catch (const InputError&) {
+      continue;
+    }
+    bool all = true;
+    for (const std::string& scan : scans) {
+      bool listed = false;
+      for (const ConfEntry& e : entries) listed |= fs::equivalent(e.file, scan, ec);
+      all &= listed;
+    }
+    if (all) return it->path().lexically_relative(fs::current_path(ec)).string();
+  }
+  return "";
+}
+
+// Range-grid PLYs hold no pose: merged as given they would not line up
+// (10 % error and dozens of boundary loops on the bunny, silently).
+void require_registration(const std::vector<std::string>& loose_scans, bool with_conf) {
+  if (loose_scans.size() < 2 && !(with_conf && !loose_scans.empty())) return;
+  std::string names;
+  for (std::size_t i = 0; i < loose_scans.size() && i < 3; ++i) names += (i ? ", " : "") + loose_scans[i];
+  if (loose_scans.size() > 3) names += " and " + std::to_string(loose_scans.size() - 3) + " more";
+  const std::string conf = conf_listing(loose_scans);
+  const std::string what =
+      std::to_string(loose_scans.size()) + " range-grid scan" + (loose_scans.size() > 1 ? "s" : "") +
+      " given without the .conf that places them in one frame" + (with_conf ? " (beside a .conf)" : "") +
+      "; range-grid PLYs carry no pose, so merged as they are they would not line up. ";
+  throw InputError(names, what + (conf.empty() ? "Give their .conf (a Stanford .conf with one bmesh line per scan)"
+                                               : "Give " + conf + ", which places them,") +
+                              " instead, or pass --unregistered if the scans already share one frame");
 }
 
 struct Job {
@@ -59,18 +122,25 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
                                     AcquisitionReport* report) {
   if (inputs.empty()) throw InputError("", "no input files given");
   std::vector<Job> jobs;
+  std::vector<std::string> loose_scans;
+  bool with_conf = false;
   for (const std::string& input : inputs) {
     Kind kind = classify(input);
     if (kind == Kind::conf) {
+      with_conf = true;
       for (ConfEntry& e : read_conf(input)) jobs.push_back({Kind::range_grid, e.file, e.pose});
     } else {
+      if (kind == Kind::range_grid) loose_scans.push_back(input);
       jobs.push_back({kind, input, ScanPose{}});
     }
   }
+  if (!options.unregistered) require_registration(loose_scans, with_conf);
 
   // Files are independent: read and orient them in parallel, merge in order.
+  // One file alone gets every core for its own parallel work (normal estimation).
   std::vector<OrientedPoints> parts(jobs.size());
-  parallel_jobs(jobs.size(), options.threads, "reading inputs", [&](std::size_t i) {
+  std::vector<std::uint8_t> estimated(jobs.size(), 0);
+  auto read_job = [&](std::size_t i, int threads) {
     const Job& job = jobs[i];
     if (job.kind == Kind::range_grid) {
       parts[i] = range_image_to_points(read_range_grid_ply(job.file), job.pose, options.lattice);
@@ -78,19 +148,42 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
       ScanPose pose;
       RangeImage image = read_organized_pcd(job.file, &pose);
       parts[i] = range_image_to_points(image, pose, options.lattice);
+    } else if (job.kind == Kind::cloud) {
+      const PointCloud cloud = read_point_cloud(job.file);
+      estimated[i] = cloud.normals.empty();
+      CloudNormalOptions cloud_options = options.cloud;
+      cloud_options.threads = threads;
+      parts[i] = cloud_to_oriented_points(cloud, cloud_options);
     } else {
       parts[i] = mesh_to_oriented_points(read_mesh(job.file));
     }
-  });
+  };
+  if (jobs.size() == 1) read_job(0, options.threads);
+  else parallel_jobs(jobs.size(), options.threads, "reading inputs", [&](std::size_t i) { read_job(i, 1); });
 
   OrientedPoints points;
+  std::size_t total = 0;
+  bool colors = false, confidence = false, spacing = false;
+  for (const OrientedPoints& part : parts) {
+    total += part.size();
+    colors |= part.has_colors(), confidence |= !part.confidence.empty(), spacing |= !part.spacing.empty();
+  }
+  // Merged once into arrays of their final size: growing them part by part
+  // would copy (and page-fault) them again at every doubling.
+  points.positions.reserve(total);
+  points.normals.reserve(total);
+  if (colors) points.colors.reserve(total);
+  if (confidence) points.confidence.reserve(total);
+  if (spacing) points.spacing.reserve(total);
   AcquisitionReport local;
   for (std::size_t i = 0; i < jobs.size(); ++i) {
     if (parts[i].size() == 0)
       throw InputError(jobs[i].file, "holds no usable points (empty, or no sample has a "
                                      "valid neighbour to estimate a normal)");
     points.append(parts[i]);
-    (jobs[i].kind == Kind::mesh ? local.meshes : local.range_images)++;
+    parts[i] = OrientedPoints{};  // freed for the next part's copy to reuse
+    if (jobs[i].kind == Kind::cloud) ++local.clouds, local.clouds_estimated += estimated[i];
+    else (jobs[i].kind == Kind::mesh ? local.meshes : local.range_images)++;
     local.files.push_back(jobs[i].file);
   }
   if (report) *report = std::move(local);

@@ -1,8 +1,10 @@
 // Everything a user may point scan2lod at becomes one set of oriented points in a
 // common frame: a Stanford .conf with its range-grid PLYs, single range-grid PLYs,
-// organized PCDs, or meshes (.ply with faces, .obj, .off, .stl).
+// organized PCDs, point clouds (vertex-only .ply, unorganized .pcd, .xyz/.pts
+// text), or meshes (.ply with faces, .obj, .off, .stl).
 #pragma once
 
+#include "acquisition/cloud_normals.h"
 #include "acquisition/lattice_normals.h"
 #include "core/types.h"
 
@@ -13,19 +15,27 @@ namespace scan2lod {
 
 struct AcquisitionOptions {
   LatticeNormalOptions lattice;
+  CloudNormalOptions cloud;
   int threads = 0;  // 0: all cores
+  // Range-grid PLYs carry no pose: several given without their .conf are
+  // refused unless the caller says they already share one frame.
+  bool unregistered = false;
 };
 
 struct AcquisitionReport {
   std::size_t range_images = 0;
   std::size_t meshes = 0;
+  std::size_t clouds = 0;             // point clouds
+  std::size_t clouds_estimated = 0;   // of those, the ones whose normals were estimated
   std::vector<std::string> files;  // every file read, in order
 };
 
 // @param[in] inputs  paths; the kind is told by extension and, for .ply, by header
 // @return the merged oriented points (normals outward, in the common frame)
 // Throws InputError naming the file for unreadable input, and when the inputs
-// hold no usable points at all.
+// hold no usable points at all; and, unless options.unregistered, for two or
+// more range-grid PLYs given without the .conf that places them (or beside a
+// .conf), naming the .conf in their folder that lists them when there is one.
 OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
                                     const AcquisitionOptions& options = {},
                                     AcquisitionReport* report = nullptr);

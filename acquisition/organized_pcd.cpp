@@ -173,9 +173,6 @@ PcdLayout read_pcd_layout(const std::string& path) {
                                std::to_string(L.height) + " differs from POINTS " +
                                std::to_string(L.points));
   if (L.points == 0) throw InputError(path, "the cloud is empty");
-  if (L.height == 1)
-    throw InputError(path, "the cloud is not organized (height 1); a range image needs "
-                           "width x height with NaN for no return");
   for (std::size_t i = 0; i < L.names.size(); ++i) {
     L.point_step += std::uint64_t(L.sizes[i]) * std::uint64_t(L.counts[i]);
     L.values_per_point += std::uint64_t(L.counts[i]);
@@ -254,42 +251,111 @@ void check_pcd_body(const std::string& path, const PcdLayout& L) {
   }
 }
 
-}  // namespace
+// The cloud as PCL reads it, after the checks above, with the sensor pose.
+struct CheckedPcd {
+  pcl::PCLPointCloud2 cloud;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+};
 
-RangeImage read_organized_pcd(const std::string& path, ScanPose* pose) {
+CheckedPcd read_checked_pcd(const std::string& path) {
   std::error_code ec;  // the throwing overload fails on e.g. an over-long name
   if (!std::filesystem::exists(path, ec)) throw InputError(path, "file does not exist");
   const PcdLayout layout = read_pcd_layout(path);
   check_pcd_body(path, layout);
-  pcl::PCLPointCloud2 cloud;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
+  CheckedPcd pcd;
   int pcd_version = 0;
   pcl::PCDReader reader;
-  if (reader.read(path, cloud, origin, orientation, pcd_version, 0) < 0)
+  if (reader.read(path, pcd.cloud, pcd.origin, pcd.orientation, pcd_version, 0) < 0)
     throw InputError(path, "PCL could not parse the PCD file (bad header or truncated data)");
+  const pcl::PCLPointCloud2& cloud = pcd.cloud;
   if (cloud.width != layout.width || cloud.height != layout.height ||
       cloud.point_step != layout.point_step ||
       cloud.data.size() != std::size_t(layout.points * layout.point_step))
     throw InputError(path, "PCL read a cloud of another size than the header gives");
   if (cloud.width == 0 || cloud.height == 0) throw InputError(path, "the cloud is empty");
+  return pcd;
+}
+
+// The 4-byte field `name` (float, or any 4-byte type for colours), or null.
+const pcl::PCLPointField* field_of(const std::string& path, const pcl::PCLPointCloud2& cloud,
+                                   std::initializer_list<const char*> names, bool any_type = false) {
+  for (const auto& f : cloud.fields)
+    for (const char* name : names) {
+      if (f.name != name) continue;
+      if (any_type ? pcl::getFieldSize(f.datatype) != 4 : f.datatype != pcl::PCLPointField::FLOAT32)
+        continue;
+      if (std::uint64_t(f.offset) + 4 > cloud.point_step)
+        throw InputError(path, "field '" + f.name + "' lies outside the point");
+      return &f;
+    }
+  return nullptr;
+}
+
+float float_at(const std::uint8_t* point, const pcl::PCLPointField* f) {
+  float v;
+  std::memcpy(&v, point + f->offset, 4);
+  return v;
+}
+
+Rgb color_at(const std::uint8_t* point, const pcl::PCLPointField* f) {
+  std::uint32_t packed;
+  std::memcpy(&packed, point + f->offset, 4);
+  return Rgb{std::uint8_t(packed >> 16), std::uint8_t(packed >> 8), std::uint8_t(packed)};
+}
+
+}  // namespace
+
+bool pcd_is_organized(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, "file does not exist");
+  return read_pcd_layout(path).height > 1;
+}
+
+PointCloud read_unorganized_pcd(const std::string& path) {
+  CheckedPcd pcd = read_checked_pcd(path);
+  const pcl::PCLPointCloud2& cloud = pcd.cloud;
+  const pcl::PCLPointField* fx = field_of(path, cloud, {"x"});
+  const pcl::PCLPointField* fy = field_of(path, cloud, {"y"});
+  const pcl::PCLPointField* fz = field_of(path, cloud, {"z"});
+  if (!fx || !fy || !fz) throw InputError(path, "the cloud needs float fields x, y and z");
+  const pcl::PCLPointField* fn[3] = {field_of(path, cloud, {"normal_x", "nx"}),
+                                     field_of(path, cloud, {"normal_y", "ny"}),
+                                     field_of(path, cloud, {"normal_z", "nz"})};
+  const bool normals = fn[0] && fn[1] && fn[2];
+  const pcl::PCLPointField* frgb = field_of(path, cloud, {"rgb", "rgba"}, true);
+  const Eigen::Matrix3f rotation = pcd.orientation.normalized().toRotationMatrix();
+  const Vec3f origin = pcd.origin.head<3>();
+  PointCloud out;
+  out.source = path;
+  const std::size_t n = std::size_t(cloud.width) * cloud.height;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t* src = &cloud.data[i * cloud.point_step];
+    const Vec3f p(float_at(src, fx), float_at(src, fy), float_at(src, fz));
+    if (!p.allFinite()) continue;  // no return
+    out.positions.push_back(rotation * p + origin);
+    if (normals) out.normals.push_back(rotation * Vec3f(float_at(src, fn[0]), float_at(src, fn[1]), float_at(src, fn[2])));
+    if (frgb) out.colors.push_back(color_at(src, frgb));
+  }
+  if (out.positions.empty()) throw InputError(path, "the cloud has no finite points");
+  // PCL writes VIEWPOINT 0 0 0 1 0 0 0 when it knows no sensor: only another one names a sensor.
+  if (origin.squaredNorm() > 0.f || !rotation.isIdentity(1e-6f)) out.viewpoint = origin;
+  return out;
+}
+
+RangeImage read_organized_pcd(const std::string& path, ScanPose* pose) {
+  CheckedPcd pcd = read_checked_pcd(path);
+  const pcl::PCLPointCloud2& cloud = pcd.cloud;
+  const Eigen::Vector4f& origin = pcd.origin;
+  const Eigen::Quaternionf& orientation = pcd.orientation;
   if (cloud.height == 1)
     throw InputError(path, "the cloud is not organized (height 1); a range image needs "
                            "width x height with NaN for no return");
-  const pcl::PCLPointField *fx = nullptr, *fy = nullptr, *fz = nullptr, *frgb = nullptr;
-  for (const auto& f : cloud.fields) {
-    if (f.datatype != pcl::PCLPointField::FLOAT32 && f.name != "rgba") continue;
-    if (f.name == "x") fx = &f;
-    if (f.name == "y") fy = &f;
-    if (f.name == "z") fz = &f;
-    if (f.name == "rgb" || f.name == "rgba") frgb = &f;
-  }
+  const pcl::PCLPointField* fx = field_of(path, cloud, {"x"});
+  const pcl::PCLPointField* fy = field_of(path, cloud, {"y"});
+  const pcl::PCLPointField* fz = field_of(path, cloud, {"z"});
   if (!fx || !fy || !fz) throw InputError(path, "the cloud needs float fields x, y and z");
-  // Every field read below is 4 bytes at its offset.
-  if (frgb && pcl::getFieldSize(frgb->datatype) != 4) frgb = nullptr;
-  for (const pcl::PCLPointField* f : {fx, fy, fz, frgb})
-    if (f && std::uint64_t(f->offset) + 4 > cloud.point_step)
-      throw InputError(path, "field '" + f->name + "' lies outside the point");
+  const pcl::PCLPointField* frgb = field_of(path, cloud, {"rgb", "rgba"}, true);
 
   RangeImage image;
   image.cols = int(cloud.width);
@@ -310,11 +376,7 @@ RangeImage read_organized_pcd(const std::string& path, ScanPose* pose) {
     if (p.allFinite()) ++valid;
     else p = Vec3f(nan, nan, nan);
     image.points[i] = p;
-    if (frgb) {
-      std::uint32_t packed;
-      std::memcpy(&packed, src + frgb->offset, 4);
-      image.colors[i] = Rgb{std::uint8_t(packed >> 16), std::uint8_t(packed >> 8), std::uint8_t(packed)};
-    }
+    if (frgb) image.colors[i] = color_at(src, frgb);
   }
   if (valid == 0) throw InputError(path, "the cloud has no finite points");
   if (pose) {

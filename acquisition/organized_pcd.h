@@ -1,6 +1,8 @@
-// Organized point clouds (.pcd with width x height, NaN for no return), read with PCL.
+// PCD files, read with PCL: organized clouds (width x height, NaN for no return)
+// as range images, unorganized ones (height 1) as point clouds.
 #pragma once
 
+#include "acquisition/point_cloud_files.h"
 #include "core/types.h"
 
 #include <string>
@@ -13,5 +15,14 @@ namespace scan2lod {
 // missing x/y/z fields or an empty cloud, and for a header or body PCL would
 // misread (checked before PCL reads: a bad one can crash its reader).
 RangeImage read_organized_pcd(const std::string& path, ScanPose* pose);
+
+// Whether the PCD's header gives a height above 1 (checked as above; throws the same).
+bool pcd_is_organized(const std::string& path);
+
+// Reads any PCD as a point cloud: the finite points, placed by VIEWPOINT like
+// read_organized_pcd; normals from normal_x/y/z (or nx/ny/nz) when all three
+// are float fields; colours from rgb/rgba. A VIEWPOINT other than PCL's
+// default (0 0 0 1 0 0 0) becomes the cloud's viewpoint.
+PointCloud read_unorganized_pcd(const std::string& path);
 
 }  // namespace scan2lod

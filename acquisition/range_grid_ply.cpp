@@ -38,6 +38,7 @@ struct PlyLayout {
   std::size_t grid_properties = 0;
   std::size_t grid_count_size = 0;  // bytes of each cell's index count
   bool grid_count_signed = false;
+  std::vector<std::string> vertex_names, vertex_types;  // in file order
 };
 
 std::size_t type_size(const std::string& t) {
@@ -111,6 +112,8 @@ PlyLayout read_layout(const std::string& path, std::ifstream& in) {
         if (size == 0) fail("unknown property type '" + type + "'");
         ++L.vertex_properties;
         L.vertex_stride += size;
+        L.vertex_names.push_back(name);
+        L.vertex_types.push_back(type);
         if (name == "x" || name == "y" || name == "z") {
           if (type != "float" && type != "float32") fail("x, y, z must be float");
           L.has_xyz[name[0] - 'x'] = true;
@@ -286,6 +289,71 @@ float read_float(const pcl::PCLPointCloud2& c, std::size_t i, const pcl::PCLPoin
   return v;
 }
 
+// Packed colour properties are PCL's to unpack; everything else a binary file
+// holds is decoded directly, which PCL's reader (a callback and a vector per
+// grid cell) does several times slower.
+bool needs_pcl(const PlyLayout& L) {
+  for (const std::string& name : L.vertex_names)
+    if (name == "rgb" || name == "rgba") return true;
+  return false;
+}
+
+// A binary range grid whose header and grid check_binary_* accepted: cell c
+// takes the vertex its first index names, NaN for an empty cell.
+RangeImage decode_binary(const std::string& path, const PlyLayout& L) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(std::streamoff(L.header_bytes));
+  std::vector<char> body((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const bool swap = L.format == PlyLayout::Format::binary_be;
+  auto scalar = [&](std::size_t at, std::size_t size, char* out) {
+    for (std::size_t k = 0; k < size; ++k) out[k] = body[at + (swap ? size - 1 - k : k)];
+  };
+  // Offsets of the properties read: x, y, z, confidence, red, green, blue.
+  static const char* kNames[7] = {"x", "y", "z", "confidence", "red", "green", "blue"};
+  long offset[7] = {-1, -1, -1, -1, -1, -1, -1};
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < L.vertex_names.size(); ++k) {
+    for (int r = 0; r < 7; ++r)
+      if (L.vertex_names[k] == kNames[r] &&
+          (r < 4 ? L.vertex_types[k] == "float" || L.vertex_types[k] == "float32"
+                 : type_size(L.vertex_types[k]) == 1))
+        offset[r] = long(at);
+    at += type_size(L.vertex_types[k]);
+  }
+  const bool colors = offset[4] >= 0 && offset[5] >= 0 && offset[6] >= 0;
+  RangeImage image;
+  image.cols = int(L.cols);
+  image.rows = int(L.rows);
+  image.source = path;
+  const std::size_t n = std::size_t(L.cols) * std::size_t(L.rows);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  image.points.assign(n, Vec3f(nan, nan, nan));
+  if (offset[3] >= 0) image.confidence.assign(n, 0.f);
+  if (colors) image.colors.assign(n, Rgb{0, 0, 0});
+  std::size_t cursor = L.vertices * L.vertex_stride;
+  for (std::size_t c = 0; c < n; ++c) {
+    std::int64_t count = 0;
+    char bytes[8] = {0};
+    scalar(cursor, L.grid_count_size, bytes);
+    if (L.grid_count_size == 1) count = L.grid_count_signed ? std::int8_t(bytes[0]) : std::uint8_t(bytes[0]);
+    else std::memcpy(&count, bytes, L.grid_count_size);  // checked: 0 to 255, so sign does not matter
+    cursor += L.grid_count_size;
+    if (count > 0) {
+      std::int32_t index;
+      scalar(cursor, 4, reinterpret_cast<char*>(&index));
+      const std::size_t v = std::size_t(index) * L.vertex_stride;
+      Vec3f p;
+      for (int a = 0; a < 3; ++a) scalar(v + std::size_t(offset[a]), 4, reinterpret_cast<char*>(&p[a]));
+      if (p.allFinite()) image.points[c] = p;
+      if (offset[3] >= 0) scalar(v + std::size_t(offset[3]), 4, reinterpret_cast<char*>(&image.confidence[c]));
+      if (colors)
+        for (int ch = 0; ch < 3; ++ch) image.colors[c][ch] = std::uint8_t(body[v + std::size_t(offset[4 + ch])]);
+    }
+    cursor += std::size_t(count) * 4;
+  }
+  return image;
+}
+
 }  // namespace
 
 RangeImage read_range_grid_ply(const std::string& path) {
@@ -298,6 +366,8 @@ RangeImage read_range_grid_ply(const std::string& path) {
     check_binary_size(path, L);
     check_binary_grid(path, L);
   }
+
+  if (L.format != PlyLayout::Format::ascii && !needs_pcl(L)) return decode_binary(path, L);
 
   pcl::PCLPointCloud2 cloud;
   Eigen::Vector4f origin;

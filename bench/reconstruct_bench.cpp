@@ -472,6 +472,18 @@ struct Settings {
   std::size_t samples = 1000000;
 };
 
+// Whether a case's name contains `only`, or one of its '|'-separated parts.
+bool name_matches(const std::string& name, const std::string& only) {
+  std::size_t at = 0;
+  while (true) {
+    const std::size_t bar = only.find('|', at);
+    if (name.find(only.substr(at, bar == std::string::npos ? std::string::npos : bar - at)) != std::string::npos)
+      return true;
+    if (bar == std::string::npos) return false;
+    at = bar + 1;
+  }
+}
+
 // Facts about the run the report prints besides the cases.
 struct RunInfo {
   std::string command_line, load_at_start, load_at_end;
@@ -664,6 +676,31 @@ void print_model_scaling_table(const std::vector<ModelBuildCase>& builds) {
                 rows);
 }
 
+// The whole job, files to mesh, against Open3D's Poisson at the comparable
+// depth on the same scans (its time excludes reading them), and the share of
+// the job that pieces and holes take.
+void print_job_summary(const std::vector<Case>& cases) {
+  const Case* job = nullptr;
+  for (const Case& c : cases)
+    if (c.kind == Case::job && c.all_ok()) job = &c;
+  if (!job) return;
+  const Case* poisson = nullptr;
+  for (const Case& c : cases)
+    if (c.method == kOpen3dPoisson && c.resolution == job->resolution && c.all_ok()) poisson = &c;
+  const ReconstructStats& st = job->stats;
+  std::printf("- **Whole job** (files to mesh, `load_oriented_points()` + `reconstruct()`, R=%d): %s s",
+              job->resolution, fixed(job->seconds(), 2).c_str());
+  if (poisson)
+    std::printf(", against %s s for %s on the points of the same scans: scan2lod is **%s× faster**",
+                fixed(poisson->seconds(), 2).c_str(), poisson->name().c_str(),
+                fixed(poisson->seconds() / job->seconds(), 1).c_str());
+  std::printf(". Pieces and holes take %s s of its last run, %s%% of the job (kd-tree %s s, signed distances "
+              "%s s, marching cubes %s s; reading the rest).\n",
+              fixed(st.seconds_cleanup, 3).c_str(), fixed(100.0 * st.seconds_cleanup / job->seconds(), 1).c_str(),
+              fixed(st.seconds_index, 3).c_str(), fixed(st.seconds_distances, 3).c_str(),
+              fixed(st.seconds_emit, 3).c_str());
+}
+
 // The best peer for time (lowest ratio to scan2lod at its comparable R) and for
 // fidelity (lowest two-sided mean), each against scan2lod at that R.
 void print_summary(const std::vector<Case>& cases) {
@@ -690,6 +727,7 @@ void print_summary(const std::vector<Case>& cases) {
   } else {
     std::printf("- **Time.** No peer completed with a scan2lod case to compare against.\n");
   }
+  print_job_summary(cases);
   const Case* ours = most_faithful ? ours_at(cases, most_faithful->resolution) : nullptr;
   if (most_faithful && ours && ours->two_sided_mean()) {
     const double peer = *most_faithful->two_sided_mean(), own = *ours->two_sided_mean();
@@ -855,7 +893,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 0.5));
   app.add_option("--samples", s.samples, "Metro samples per direction for fidelity");
   app.add_option("--only", s.only,
-                 "Run only the cases whose name (e.g. \"Open3D Poisson depth 8\") contains this; "
+                 "Run only the cases whose name (e.g. \"Open3D Poisson depth 8\") contains this, or one of "
+                 "several texts separated by '|'; "
                  "the others are listed as skipped");
   CLI11_PARSE(app, argc, argv);
   if (s.input.empty()) {
@@ -1010,8 +1049,7 @@ int main(int argc, char** argv) {
   });
 
   for (Case& c : cases) {
-    if (c.skipped.empty() && c.name().find(s.only) == std::string::npos)
-      c.skipped = "skipped (--only)";
+    if (c.skipped.empty() && !name_matches(c.name(), s.only)) c.skipped = "skipped (--only)";
     if (c.skipped.empty()) run_case(c, s.runs, s.repeat_under, s.timeout);
     else std::fprintf(stderr, "%s: %s\n", c.name().c_str(), c.skipped.c_str());
   }
@@ -1022,7 +1060,7 @@ int main(int argc, char** argv) {
     ModelBuildCase b;
     b.resolution = R;
     const std::string name = "scan2lod model build R=" + std::to_string(R);
-    if (name.find(s.only) == std::string::npos) {
+    if (!name_matches(name, s.only)) {
       std::fprintf(stderr, "%s: skipped (--only)\n", name.c_str());
       builds.push_back(std::move(b));
       continue;

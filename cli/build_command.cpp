@@ -60,8 +60,7 @@ void add_build_command(CLI::App& app) {
     const ReconstructOptions& options = args->flags.resolve();
     check_model_output(args->output);
     refuse_overwriting_inputs(args->output, args->inputs);
-    AcquisitionOptions acquisition;
-    acquisition.threads = options.threads;
+    const AcquisitionOptions& acquisition = args->flags.acquisition;
     const bool want_octree = args->structure != "clusters", want_clusters = args->structure != "octree";
     // A single mesh input keeps its own triangles for the cluster hierarchy.
     AcquisitionReport report;

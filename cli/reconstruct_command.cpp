@@ -38,8 +38,7 @@ void add_reconstruct_command(CLI::App& app) {
     const ReconstructOptions& options = args->flags.resolve();
     check_mesh_output(args->output);
     refuse_overwriting_inputs(args->output, args->inputs);
-    AcquisitionOptions acquisition;
-    acquisition.threads = options.threads;
+    const AcquisitionOptions& acquisition = args->flags.acquisition;
     AcquisitionReport report;
     OrientedPoints points = load_oriented_points(args->inputs, acquisition, &report);
     refuse_overwriting_inputs(args->output, report.files);

@@ -1,11 +1,15 @@
 #include "cli/reconstruct_flags.h"
 
+#include "cli/terminal.h"
 #include "core/error.h"
+
+#include <cstdio>
 
 namespace scan2lod::cli {
 
 const ReconstructOptions& ReconstructFlags::resolve() {
   options.distance.method = parse_distance_method(method);
+  acquisition.threads = options.threads;
   return options;
 }
 
@@ -30,10 +34,13 @@ void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {
       ->capture_default_str();
   cmd->add_option("--hole-rounds", o.hole_rounds, "Rings of cubes a small hole is closed by from each side, at most")
       ->capture_default_str();
+  cmd->add_flag("--unregistered", flags->acquisition.unregistered,
+                "Range-grid PLYs given without their .conf already share one frame: merge them as they are");
   cmd->add_option("-j,--threads", o.threads, "Threads (0: all cores)")->capture_default_str();
 }
 
 void require_surface(const std::vector<std::string>& inputs, const Reconstruction& r, int resolution) {
+  for (const std::string& warning : r.warnings) warn(warning);
   if (!r.mesh.triangles.empty()) return;
   std::string names;
   for (const std::string& input : inputs) names += (names.empty() ? "" : ", ") + input;

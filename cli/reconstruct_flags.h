@@ -2,6 +2,7 @@
 // one onto ReconstructOptions (reconstruct/marching_cubes.h).
 #pragma once
 
+#include "acquisition/load_inputs.h"
 #include "reconstruct/marching_cubes.h"
 
 #include <CLI/CLI.hpp>
@@ -14,18 +15,21 @@ namespace scan2lod::cli {
 struct ReconstructFlags {
   ReconstructOptions options;
   std::string method = "planes";  // --distance, parsed by resolve()
+  AcquisitionOptions acquisition; // --unregistered; threads set by resolve()
 
   // Sets options.distance.method from `method`; throws for an unknown name.
   const ReconstructOptions& resolve();
 };
 
 // Adds -r/--resolution, --margin, --distance, --neighbours, --max-distance,
-// --reach, --min-piece, --max-hole, --hole-rounds and -j/--threads to `cmd`,
+// --reach, --min-piece, --max-hole, --hole-rounds, --unregistered and
+// -j/--threads to `cmd`,
 // with the options' defaults shown in --help. `flags` must outlive parsing.
 void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags);
 
 // Throws InputError naming the inputs when the reconstruction found no
-// surface, rather than writing an empty mesh or model.
+// surface, rather than writing an empty mesh or model; prints the
+// reconstruction's warnings (e.g. a grid far finer than a mesh's vertices) to stderr.
 void require_surface(const std::vector<std::string>& inputs, const Reconstruction& r, int resolution);
 
 }  // namespace scan2lod::cli

@@ -27,6 +27,10 @@ void say(const char* format, ...) {
   va_end(args);
 }
 
+void warn(const std::string& text) {
+  if (!g_quiet) std::fprintf(stderr, "scan2lod: warning: %s\n", text.c_str());
+}
+
 void install_terminal_progress() {
   if (!isatty(fileno(stderr))) return;
   set_progress_sink([](const std::string& label, double fraction, bool finished) {

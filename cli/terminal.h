@@ -3,6 +3,8 @@
 // JSON a command was asked for with --json.
 #pragma once
 
+#include <string>
+
 namespace scan2lod::cli {
 
 void set_quiet(bool quiet);
@@ -10,6 +12,9 @@ bool quiet();
 
 // printf to stdout unless --quiet.
 void say(const char* format, ...) __attribute__((format(printf, 1, 2)));
+
+// "scan2lod: warning: TEXT" on stderr unless --quiet.
+void warn(const std::string& text);
 
 // Draws the library's progress (core/progress.h) as a bar on stderr, only when
 // stderr is a terminal and --quiet was not given.

@@ -1,5 +1,7 @@
 #include "reconstruct/hole_filling.h"
 
+#include "core/flat_hash.h"
+
 #include <algorithm>
 #include <limits>
 #include <unordered_set>
@@ -50,44 +52,68 @@ bool triangulate(const TriangleMesh& mesh, const std::vector<std::int32_t>& loop
 
 std::vector<Triangle> fill_small_holes(const TriangleMesh& mesh, std::size_t max_edges) {
   // Boundary half-edges: a -> b used by one triangle, in its orientation.
-  std::vector<std::pair<std::uint64_t, std::pair<std::int32_t, std::int32_t>>> half;
+  std::vector<std::pair<std::uint64_t, std::array<std::int32_t, 2>>> half;
   half.reserve(mesh.triangles.size() * 3);
   for (const Triangle& t : mesh.triangles)
     for (int k = 0; k < 3; ++k) half.push_back({edge_key(t[k], t[(k + 1) % 3]), {t[k], t[(k + 1) % 3]}});
-  std::sort(half.begin(), half.end(),
-            [](const auto& x, const auto& y) { return x.first < y.first; });
-  std::vector<std::int32_t> next(mesh.positions.size(), -1);
-  std::vector<std::uint8_t> pinched(mesh.positions.size(), 0);
-  std::unordered_set<std::uint64_t> edges;
-  edges.reserve(half.size());
+  std::sort(half.begin(), half.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::vector<std::array<std::int32_t, 2>> boundary;
   for (std::size_t i = 0; i < half.size();) {
     std::size_t j = i;
     while (j < half.size() && half[j].first == half[i].first) ++j;
-    edges.insert(half[i].first);
-    if (j - i == 1) {
-      const auto [a, b] = half[i].second;
-      if (next[a] >= 0) pinched[a] = 1;  // two boundary edges leave a: ambiguous loop
-      next[a] = b;
-    }
+    if (j - i == 1) boundary.push_back(half[i].second);
     i = j;
   }
-  std::vector<Triangle> patch;
-  std::vector<std::uint8_t> seen(mesh.positions.size(), 0);
-  std::vector<std::int32_t> loop;
-  for (std::size_t start = 0; start < next.size(); ++start) {
+  return fill_small_holes(mesh, boundary, max_edges);
+}
+
+std::vector<Triangle> fill_small_holes(const TriangleMesh& mesh,
+                                       const std::vector<std::array<std::int32_t, 2>>& boundary,
+                                       std::size_t max_edges) {
+  // The boundary's vertices, numbered locally, with the edge leaving each.
+  FlatHashMap local(boundary.size() * 2 + 16);
+  std::vector<std::int32_t> vertex, next;
+  std::vector<std::uint8_t> pinched;
+  auto local_id = [&](std::int32_t v) {
+    const std::int32_t fresh = std::int32_t(vertex.size());
+    const std::int32_t id = local.insert(std::uint64_t(std::uint32_t(v)), fresh);
+    if (id == fresh) vertex.push_back(v), next.push_back(-1), pinched.push_back(0);
+    return id;
+  };
+  for (const auto& [a, b] : boundary) {
+    const std::int32_t la = local_id(a), lb = local_id(b);
+    if (next[la] >= 0) pinched[la] = 1;  // two boundary edges leave a: ambiguous loop
+    next[la] = lb;
+  }
+  // Closed, unpinched loops of a size to fill.
+  std::vector<std::vector<std::int32_t>> loops;
+  std::vector<std::uint8_t> seen(vertex.size(), 0);
+  for (std::size_t start = 0; start < vertex.size(); ++start) {
     if (next[start] < 0 || seen[start]) continue;
-    loop.clear();
+    std::vector<std::int32_t> loop;
     bool usable = true;
     std::int32_t v = std::int32_t(start);
     while (v >= 0 && !seen[v]) {
       seen[v] = 1;
       usable &= !pinched[v];
-      loop.push_back(v);
+      loop.push_back(vertex[v]);
       v = next[v];
     }
     if (v != std::int32_t(start) || !usable || loop.size() < 3 || loop.size() > max_edges) continue;
-    triangulate(mesh, loop, edges, &patch);
+    loops.push_back(std::move(loop));
   }
+  if (loops.empty()) return {};
+  // The mesh edges between loop vertices: a diagonal that already is one
+  // would get a third triangle.
+  std::vector<std::uint8_t> on_loop(mesh.positions.size(), 0);
+  for (const auto& loop : loops)
+    for (std::int32_t v : loop) on_loop[v] = 1;
+  std::unordered_set<std::uint64_t> edges;
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k)
+      if (on_loop[t[k]] && on_loop[t[(k + 1) % 3]]) edges.insert(edge_key(t[k], t[(k + 1) % 3]));
+  std::vector<Triangle> patch;
+  for (const auto& loop : loops) triangulate(mesh, loop, edges, &patch);
   return patch;
 }
 

@@ -7,6 +7,7 @@
 
 #include "core/types.h"
 
+#include <array>
 #include <vector>
 
 namespace scan2lod {
@@ -17,5 +18,13 @@ namespace scan2lod {
 //   pass twice through a vertex, and diagonals that already are mesh edges, are
 //   skipped, so adding the result keeps the mesh edge-manifold.
 std::vector<Triangle> fill_small_holes(const TriangleMesh& mesh, std::size_t max_edges);
+
+// The same, given the mesh's boundary: every half-edge a -> b that one triangle
+// uses, in that triangle's order (any order of edges). Only the boundary's
+// loops and the triangles at their vertices are looked at, so a caller that
+// keeps its boundary current pays for the holes, not the surface.
+std::vector<Triangle> fill_small_holes(const TriangleMesh& mesh,
+                                       const std::vector<std::array<std::int32_t, 2>>& boundary,
+                                       std::size_t max_edges);
 
 }  // namespace scan2lod

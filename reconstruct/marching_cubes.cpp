@@ -5,6 +5,7 @@
 #include "core/progress.h"
 #include "reconstruct/cube_table.h"
 #include "reconstruct/hole_filling.h"
+#include "reconstruct/resolution_guard.h"
 
 #include <omp.h>
 
@@ -13,11 +14,13 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 namespace scan2lod {
 namespace {
 
 constexpr std::uint64_t kAxisStep[3] = {1ull, 1ull << 20, 1ull << 40};
+
 
 std::uint64_t corner_key_of(std::uint64_t cube_key, int corner) {
   return cube_key + (corner & 1) * kAxisStep[0] + ((corner >> 1) & 1) * kAxisStep[1] +
@@ -58,11 +61,15 @@ struct UnionFind {
 };
 
 // The sparse grid and the surface on it, built in stages: seed cubes, surface
-// following, piece removal, hole closing, and the final emission.
+// following, one emission, then piece removal and hole closing as local edits
+// of that surface, and a final compaction (finish).
 class SurfaceBuilder {
  public:
-  SurfaceBuilder(const OrientedPoints& points, const ReconstructOptions& options)
-      : points_(points),
+  // expected_cubes: the guard's estimate of the cubes the surface touches, to
+  // size the grid's arrays once rather than grow (and page-fault) them again.
+  SurfaceBuilder(const OrientedPoints& points, const ReconstructOptions& options, double expected_cubes)
+      : expected_cubes_(std::size_t(std::min(expected_cubes, 1e9))),
+        points_(points),
         options_(options),
         threads_(options.threads > 0 ? options.threads : omp_get_max_threads()),
         grid_(make_cube_grid(bounds(points.positions), options.resolution)),
@@ -93,126 +100,98 @@ class SurfaceBuilder {
     return rounds - 1;
   }
 
-  // Triangulates every usable cube with all corners defined and a sign change.
-  // triangle_cube and triangle_slot say which cube, and which of its case's
-  // triangles, each mesh triangle is.
-  void emit(CubeNodes* leaves, TriangleMesh* mesh, std::vector<std::int32_t>* triangle_cube,
-            std::vector<std::uint8_t>* triangle_slot) {
-    const auto& table = cube_cases();
-    *leaves = CubeNodes{};
-    *mesh = TriangleMesh{};
-    triangle_cube->clear();
-    triangle_slot->clear();
-    leaves->grid = grid_;
-    std::vector<std::int32_t>& source = leaf_cube_;
-    source.clear();
-    emitting_.assign(cube_keys_.size(), 0);
-    for (std::size_t c = 0; c < cube_keys_.size(); ++c) {
-      std::uint8_t mask;
-      if (!usable_[c] || !cube_case(c, &mask) || mask == 0 || mask == 255) continue;
-      if ((masks_[c] & ((1u << table[mask].triangle_count) - 1)) == 0) continue;
-      leaves->cube_keys.push_back(cube_keys_[c]);
-      leaves->cases.push_back(mask);
-      leaves->triangle_masks.push_back(masks_[c]);
-      leaves->corners.push_back(cube_corners_[c]);
-      source.push_back(std::int32_t(c));
-      emitting_[c] = 1;
-    }
-    // One shared vertex per crossed grid edge, keyed by its lower corner and axis.
-    FlatHashMap edge_index(leaves->size() * 2);
-    leaves->edge_vertices.resize(leaves->size());
-    leaves->edge_ratios.resize(leaves->size());
-    for (std::size_t l = 0; l < leaves->size(); ++l) {
-      const CubeCase& cc = table[leaves->cases[l]];
-      auto& ev = leaves->edge_vertices[l];
-      auto& er = leaves->edge_ratios[l];
-      ev.fill(-1);
-      er.fill(0.f);
-      for (int e = 0; e < 12; ++e) {
-        if (!(cc.edge_mask >> e & 1)) continue;
-        const int a = edge_corner(e, 0), b = edge_corner(e, 1);
-        const float da = corner_distances_[leaves->corners[l][a]];
-        const float db = corner_distances_[leaves->corners[l][b]];
-        // Ratio of |distances| (seed §4.2), kept off the corners so no triangle collapses.
-        const float t = std::clamp(std::fabs(da) / (std::fabs(da) + std::fabs(db)), 1e-4f, 1.f - 1e-4f);
-        er[e] = t;
-        const std::uint64_t lower = corner_key_of(leaves->cube_keys[l], a);
-        const std::int32_t fresh = std::int32_t(mesh->positions.size());
-        const std::int32_t id = edge_index.insert((lower << 2) | std::uint64_t(e / 4), fresh);
-        if (id == fresh) {
-          int x, y, z;
-          unpack_key(lower, &x, &y, &z);
-          Vec3f p = grid_.corner_position(x, y, z);
-          p[e / 4] += t * h_;
-          mesh->positions.push_back(p);
-        }
-        ev[e] = id;
-      }
-      for (int t = 0; t < cc.triangle_count; ++t) {
-        if (!(leaves->triangle_masks[l] >> t & 1)) continue;
-        mesh->triangles.push_back({ev[cc.triangles[t][0]], ev[cc.triangles[t][1]], ev[cc.triangles[t][2]]});
-        triangle_cube->push_back(source[l]);
-        triangle_slot->push_back(std::uint8_t(t));
-      }
-    }
-    // Only the corners of emitting cubes are kept with the leaves.
-    std::vector<std::int32_t> remap(corner_keys_.size(), -1);
-    for (auto& corners : leaves->corners) {
-      for (std::int32_t& id : corners) {
-        if (remap[id] < 0) {
-          remap[id] = std::int32_t(leaves->corner_keys.size());
-          leaves->corner_keys.push_back(corner_keys_[id]);
-          leaves->corner_distances.push_back(corner_distances_[id]);
-          if (points_.has_colors()) leaves->corner_colors.push_back(points_.colors[corner_nearest_[id]]);
-        }
-        id = remap[id];
-      }
-    }
+  // Triangulates the given cubes, appending to the surface: each usable cube
+  // with all corners defined, a sign change and a kept case triangle becomes a
+  // leaf. Vertices on grid edges are shared with the leaves emitted before.
+  // Returns the first new leaf; the new ones run to leaf_count().
+  std::size_t emit(const std::vector<std::int32_t>& cubes) {
+    const std::size_t first = leaf_cube_.size();
+    leaf_of_.resize(cube_keys_.size(), -1);
+    select_leaves(cubes);
+    const std::size_t end = leaf_cube_.size();
+    reserve_room(&leaf_edge_vertices_, end);
+    reserve_room(&leaf_edge_ratios_, end);
+    reserve_room(&leaf_first_triangle_, end);
+    leaf_edge_vertices_.resize(end);
+    leaf_edge_ratios_.resize(end);
+    leaf_first_triangle_.resize(end);
+    place_ratios(first, end);
+    share_vertices(first, end);
+    write_triangles(first, end);
+    return first;
   }
+
+  std::size_t leaf_count() const { return leaf_cube_.size(); }
 
   // Drops pieces of the surface with fewer than `fraction` of its triangles:
   // the specks and fins that noisy scans leave off thin edges. A piece can share
   // a cube with a kept one, so pieces are dropped triangle by triangle, through
-  // the cube's mask of kept case triangles.
-  std::size_t drop_small_pieces(const TriangleMesh& mesh, const std::vector<std::int32_t>& triangle_cube,
-                                const std::vector<std::uint8_t>& triangle_slot, double fraction) {
-    if (fraction <= 0.0 || mesh.triangles.empty()) return 0;
-    UnionFind uf(mesh.positions.size());
-    for (const Triangle& t : mesh.triangles) uf.unite(t[0], t[1]), uf.unite(t[1], t[2]);
-    std::vector<std::int32_t> size(mesh.positions.size(), 0);
-    for (const Triangle& t : mesh.triangles) ++size[uf.find(t[0])];
-    const double limit = fraction * double(mesh.triangles.size());
+  // the cube's mask of kept case triangles; a cube left with none stops being a
+  // leaf. Returns the number of triangles dropped.
+  std::size_t drop_small_pieces(double fraction) {
+    if (fraction <= 0.0 || live_triangles_ == 0) return 0;
+    UnionFind& uf = vertex_sets_;
+    uf.parent.resize(positions_.size());
+    std::iota(uf.parent.begin(), uf.parent.end(), 0);
+    for (std::size_t t = 0; t < triangles_.size(); ++t)
+      if (triangle_alive_[t]) uf.unite(triangles_[t][0], triangles_[t][1]), uf.unite(triangles_[t][1], triangles_[t][2]);
+    std::vector<std::int32_t>& size = scratch_counts_;
+    size.assign(positions_.size(), 0);
+    for (std::size_t t = 0; t < triangles_.size(); ++t)
+      if (triangle_alive_[t]) ++size[uf.find(triangles_[t][0])];
+    const double limit = fraction * double(live_triangles_);
+    std::vector<std::int32_t> touched;
     std::size_t dropped = 0;
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-      if (size[uf.find(mesh.triangles[t][0])] >= limit) continue;
-      masks_[triangle_cube[t]] &= std::uint16_t(~(1u << triangle_slot[t]));
+    for (std::size_t t = 0; t < triangles_.size(); ++t) {
+      if (!triangle_alive_[t] || size[uf.find(triangles_[t][0])] >= limit) continue;
+      const std::int32_t l = triangle_leaf_[t];
+      masks_[leaf_cube_[l]] &= std::uint16_t(~(1u << triangle_slot_[t]));
+      triangle_alive_[t] = 0;
+      touched.push_back(l);
       ++dropped;
     }
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    const auto& table = cube_cases();
+    std::vector<std::int32_t> dead;
+    for (std::int32_t l : touched)
+      if ((masks_[leaf_cube_[l]] & ((1u << table[leaf_case_[l]].triangle_count) - 1)) == 0) dead.push_back(l);
+    live_triangles_ -= dropped;
+    kill_leaves(dead);
+    refresh_open_edges(touched, dead);
     return dropped;
   }
 
   // One round of hole closing: every cube across an open face of a boundary
   // loop of at most `max_edges` edges is made usable, its missing corners
-  // evaluated under relaxed distance limits. Returns the number of cubes added.
-  std::size_t grow_into_small_holes(const CubeNodes& leaves, std::size_t vertex_count, std::size_t max_edges) {
-    const std::vector<OpenEdge> open = open_edges(leaves);
-    if (open.empty()) return 0;
-    UnionFind loops(vertex_count);
-    for (const OpenEdge& e : open) loops.unite(e.a, e.b);
-    std::vector<std::int32_t> loop_edges(vertex_count, 0);
-    for (const OpenEdge& e : open) ++loop_edges[loops.find(e.a)];
+  // evaluated under relaxed distance limits, and emitted. Returns the number
+  // of cubes added.
+  std::size_t grow_into_small_holes(std::size_t max_edges) {
+    if (open_.empty()) return 0;
+    // Loops of the open edges, over their own vertices only.
+    FlatHashMap local(open_.size() * 2);
+    UnionFind loops(0);
+    auto local_id = [&](std::int32_t v) {
+      const std::int32_t fresh = std::int32_t(loops.parent.size());
+      const std::int32_t id = local.insert(std::uint64_t(v), fresh);
+      if (id == fresh) loops.parent.push_back(fresh);
+      return id;
+    };
+    for (const OpenEdge& e : open_) loops.unite(local_id(e.a), local_id(e.b));
+    std::vector<std::int32_t> loop_edges(loops.parent.size(), 0);
+    for (const OpenEdge& e : open_) ++loop_edges[loops.find(local.find(std::uint64_t(e.a)))];
     // Each hole keeps one id across rounds: a loop inherits the ids of the grown
     // cubes on its rim, and ids that meet in one loop are merged.
-    std::vector<std::int32_t> loop_hole(vertex_count, -1);
-    for (const OpenEdge& e : open) {
-      const std::int32_t root = loops.find(e.a);
+    std::vector<std::int32_t> loop_hole(loops.parent.size(), -1);
+    for (const OpenEdge& e : open_) {
+      const std::int32_t root = loops.find(local.find(std::uint64_t(e.a)));
       if (std::size_t(loop_edges[root]) > max_edges) continue;
       if (loop_hole[root] < 0) loop_hole[root] = new_hole();
       if (hole_of_[e.cube] >= 0) unite_holes(loop_hole[root], hole_of_[e.cube]);
     }
     std::vector<std::int32_t> grow;
-    for (const OpenEdge& e : open) {
-      const std::int32_t root = loops.find(e.a);
+    for (const OpenEdge& e : open_) {
+      const std::int32_t root = loops.find(local.find(std::uint64_t(e.a)));
       if (loop_hole[root] < 0) continue;
       std::uint64_t key;
       if (!neighbour_key(e.cube, e.face, &key)) continue;
@@ -232,25 +211,94 @@ class SurfaceBuilder {
     if (grow.empty()) return 0;
     SignedDistanceOptions relaxed = options_.distance;
     relaxed.max_distance *= 2.f;
-    for (std::int32_t c : grow) usable_[c] = 1, grown_[c] = 1;
+    for (std::int32_t c : grow) usable_[c] = 1, grown_[c] = 1, grown_list_.push_back(c);
     evaluate_corners_of(grow, relaxed, nullptr);
+    const std::size_t first = emit(grow);
+    std::vector<std::int32_t> fresh(leaf_count() - first);
+    std::iota(fresh.begin(), fresh.end(), std::int32_t(first));
+    refresh_open_edges(fresh, {});
     return grow.size();
   }
 
   // Keeps the cubes grown into a hole only where the hole closed: the cubes of a
   // hole that still has an open edge are given up, since the surface they added
   // would only be a lip around a hole that stays.
-  std::size_t give_up_open_growth(const CubeNodes& leaves) {
+  std::size_t give_up_open_growth() {
     std::vector<std::uint8_t> open(hole_parent_.size(), 0);
-    for (const OpenEdge& e : open_edges(leaves)) {
+    for (const OpenEdge& e : open_) {
       if (hole_of_[e.cube] >= 0) open[find_hole(hole_of_[e.cube])] = 1;
       const std::int32_t n = neighbour(e.cube, e.face);
       if (n >= 0 && hole_of_[n] >= 0) open[find_hole(hole_of_[n])] = 1;
     }
+    std::vector<std::int32_t> dead;
     std::size_t given_up = 0;
-    for (std::size_t c = 0; c < cube_keys_.size(); ++c)
-      if (grown_[c] && open[find_hole(hole_of_[c])]) usable_[c] = 0, grown_[c] = 0, ++given_up;
+    for (std::int32_t c : grown_list_) {
+      if (!grown_[c] || !open[find_hole(hole_of_[c])]) continue;
+      usable_[c] = 0, grown_[c] = 0, ++given_up;
+      const std::int32_t l = c < std::int32_t(leaf_of_.size()) ? leaf_of_[c] : -1;
+      if (l >= 0 && leaf_alive_[l]) dead.push_back(l);
+    }
+    for (std::int32_t l : dead) {
+      const std::size_t end = std::size_t(l) + 1 < leaf_count() ? leaf_first_triangle_[l + 1] : triangles_.size();
+      for (std::size_t t = leaf_first_triangle_[l]; t < end; ++t)
+        if (triangle_alive_[t]) triangle_alive_[t] = 0, --live_triangles_;
+    }
+    kill_leaves(dead);
+    refresh_open_edges({}, dead);
     return given_up;
+  }
+
+  // The leaves and mesh of the live surface, compacted: dead leaves, triangles
+  // and vertices left out, corners kept only where a leaf uses them, each in
+  // its present order. Compacts the builder's own arrays in place and moves
+  // them out, so nothing surface-sized is allocated again; the builder holds
+  // no surface afterwards. `boundary` receives the open edges as mesh half-edges.
+  void finish(CubeNodes* leaves, TriangleMesh* mesh, std::vector<std::array<std::int32_t, 2>>* boundary) {
+    std::vector<std::int32_t> vertex_remap(positions_.size(), 0), corner_remap(corner_keys_.size(), 0);
+    for (std::size_t l = 0; l < leaf_count(); ++l) {
+      if (!leaf_alive_[l]) continue;
+      for (std::int32_t v : leaf_edge_vertices_[l])
+        if (v >= 0) vertex_remap[v] = 1;
+      for (std::int32_t c : cube_corners_[leaf_cube_[l]]) corner_remap[c] = 1;
+    }
+    const std::size_t vertices = number_kept(&vertex_remap), corners = number_kept(&corner_remap);
+    *leaves = CubeNodes{};
+    leaves->grid = grid_;
+    compact_leaves(vertex_remap, corner_remap, leaves);
+    // Kept items move down (new index <= old), so compaction in place is safe.
+    for (std::size_t v = 0; v < positions_.size(); ++v)
+      if (vertex_remap[v] >= 0) positions_[vertex_remap[v]] = positions_[v];
+    positions_.resize(vertices);
+    mesh->positions = std::move(positions_);
+    if (points_.has_colors()) leaves->corner_colors.resize(corners);
+    for (std::size_t c = 0; c < corner_keys_.size(); ++c) {
+      const std::int32_t to = corner_remap[c];
+      if (to < 0) continue;
+      if (points_.has_colors()) leaves->corner_colors[to] = points_.colors[corner_nearest_[c]];
+      corner_keys_[to] = corner_keys_[c];
+      corner_distances_[to] = corner_distances_[c];
+    }
+    corner_keys_.resize(corners);
+    corner_distances_.resize(corners);
+    leaves->corner_keys = std::move(corner_keys_);
+    leaves->corner_distances = std::move(corner_distances_);
+    std::size_t kept = 0;
+    for (std::size_t t = 0; t < triangles_.size(); ++t)
+      if (triangle_alive_[t])
+        triangles_[kept++] = {vertex_remap[triangles_[t][0]], vertex_remap[triangles_[t][1]],
+                              vertex_remap[triangles_[t][2]]};
+    triangles_.resize(kept);
+    mesh->triangles = std::move(triangles_);
+    boundary->clear();
+    for (const OpenEdge& e : open_) boundary->push_back({vertex_remap[e.a], vertex_remap[e.b]});
+  }
+
+  // Open edges of every leaf, found once after the first emission; later
+  // changes refresh them locally.
+  void find_open_edges() {
+    open_.clear();
+    for (std::size_t l = 0; l < leaf_count(); ++l)
+      if (leaf_alive_[l]) append_open_edges(std::int32_t(l), &open_);
   }
 
  private:
@@ -265,39 +313,223 @@ class SurfaceBuilder {
   void unite_holes(std::int32_t a, std::int32_t b) { hole_parent_[find_hole(a)] = find_hole(b); }
 
   struct OpenEdge {
-    std::int32_t a, b;  // mesh vertices
+    std::int32_t a, b;  // vertices, in the order of the triangle using the edge
     std::int32_t cube;
     int face;           // axis * 2 + side
   };
 
-  // Edges of the surface used by one triangle, found cube by cube: a triangle
-  // edge on a cube face is open when the cube across that face emits nothing
-  // (two cubes sharing a face always join its crossings the same way).
-  std::vector<OpenEdge> open_edges(const CubeNodes& leaves) const {
+  // Turns flags (1: kept) into new indices in the same order, -1 for dropped;
+  // returns the number kept.
+  static std::size_t number_kept(std::vector<std::int32_t>* remap) {
+    std::int32_t next = 0;
+    for (std::int32_t& r : *remap) r = r ? next++ : -1;
+    return std::size_t(next);
+  }
+
+  // The live leaves, in order, moved into `leaves` with vertices and corners
+  // renumbered.
+  void compact_leaves(const std::vector<std::int32_t>& vertex_remap, const std::vector<std::int32_t>& corner_remap,
+                      CubeNodes* leaves) {
+    const std::size_t alive = std::size_t(std::count(leaf_alive_.begin(), leaf_alive_.end(), 1));
+    leaves->cube_keys.resize(alive);
+    leaves->cases.resize(alive);
+    leaves->triangle_masks.resize(alive);
+    leaves->corners.resize(alive);
+    std::size_t n = 0;
+    for (std::size_t l = 0; l < leaf_count(); ++l) {
+      if (!leaf_alive_[l]) continue;
+      const std::int32_t c = leaf_cube_[l];
+      leaves->cube_keys[n] = cube_keys_[c];
+      leaves->cases[n] = leaf_case_[l];
+      leaves->triangle_masks[n] = masks_[c];
+      for (int k = 0; k < 8; ++k) leaves->corners[n][k] = corner_remap[cube_corners_[c][k]];
+      for (int e = 0; e < 12; ++e) {
+        const std::int32_t v = leaf_edge_vertices_[l][e];
+        leaf_edge_vertices_[n][e] = v >= 0 ? vertex_remap[v] : -1;
+      }
+      leaf_edge_ratios_[n] = leaf_edge_ratios_[l];
+      ++n;
+    }
+    leaf_edge_vertices_.resize(alive);
+    leaf_edge_ratios_.resize(alive);
+    leaves->edge_vertices = std::move(leaf_edge_vertices_);
+    leaves->edge_ratios = std::move(leaf_edge_ratios_);
+  }
+
+  // Grows a buffer's capacity ahead of need: the first emission is most of the
+  // surface, hole closing adds a little, and a reallocation here would copy
+  // and page-fault the whole array again.
+  template <class T>
+  static void reserve_room(std::vector<T>* v, std::size_t needed) {
+    if (v->capacity() >= needed) return;
+    v->reserve(needed + needed / 8 + 1024);
+  }
+
+  // Appends the cubes that emit as leaves: usable, all corners defined, a sign
+  // change, and a kept case triangle. Cubes are judged on both cores.
+  void select_leaves(const std::vector<std::int32_t>& cubes) {
+    const auto& table = cube_cases();
+    std::vector<std::uint8_t>& cases = scratch_cases_;
+    cases.assign(cubes.size(), 0);  // 0: not a leaf (case 0 never emits)
+#pragma omp parallel for schedule(static) num_threads(cubes.size() > 4096 ? threads_ : 1)
+    for (std::size_t i = 0; i < cubes.size(); ++i) {
+      const std::int32_t c = cubes[i];
+      std::uint8_t mask;
+      if (leaf_of_[c] >= 0 || !usable_[c] || !cube_case(std::size_t(c), &mask) || mask == 0 || mask == 255)
+        continue;
+      if ((masks_[c] & ((1u << table[mask].triangle_count) - 1)) == 0) continue;
+      cases[i] = mask;
+    }
+    const std::size_t count = leaf_cube_.size() + cubes.size() - std::size_t(std::count(cases.begin(), cases.end(), 0));
+    reserve_room(&leaf_cube_, count);
+    reserve_room(&leaf_case_, count);
+    reserve_room(&leaf_alive_, count);
+    for (std::size_t i = 0; i < cubes.size(); ++i) {
+      if (!cases[i]) continue;
+      leaf_of_[cubes[i]] = std::int32_t(leaf_cube_.size());
+      leaf_cube_.push_back(cubes[i]);
+      leaf_case_.push_back(cases[i]);
+      leaf_alive_.push_back(1);
+    }
+  }
+
+  // Appends the kept case triangles of leaves [first, end), numbered first so
+  // that both cores can write them.
+  void write_triangles(std::size_t first, std::size_t end) {
+    const auto& table = cube_cases();
+    const std::size_t before = triangles_.size();
+    std::size_t total = before;
+    for (std::size_t l = first; l < end; ++l) {
+      leaf_first_triangle_[l] = std::uint32_t(total);
+      const std::uint32_t kept = masks_[leaf_cube_[l]] & ((1u << table[leaf_case_[l]].triangle_count) - 1);
+      total += std::size_t(__builtin_popcount(kept));
+    }
+    reserve_room(&triangles_, total);
+    reserve_room(&triangle_leaf_, total);
+    reserve_room(&triangle_slot_, total);
+    reserve_room(&triangle_alive_, total);
+    triangles_.resize(total);
+    triangle_leaf_.resize(total);
+    triangle_slot_.resize(total);
+    triangle_alive_.resize(total, 1);
+#pragma omp parallel for schedule(static) num_threads(end - first > 4096 ? threads_ : 1)
+    for (std::size_t l = first; l < end; ++l) {
+      const CubeCase& cc = table[leaf_case_[l]];
+      const auto& ev = leaf_edge_vertices_[l];
+      std::size_t at = leaf_first_triangle_[l];
+      for (int t = 0; t < cc.triangle_count; ++t) {
+        if (!(masks_[leaf_cube_[l]] >> t & 1)) continue;
+        triangles_[at] = {ev[cc.triangles[t][0]], ev[cc.triangles[t][1]], ev[cc.triangles[t][2]]};
+        triangle_leaf_[at] = std::int32_t(l);
+        triangle_slot_[at] = std::uint8_t(t);
+        ++at;
+      }
+    }
+    live_triangles_ += total - before;
+  }
+
+  // Fills the leaves' edge_ratios: each vertex at the ratio of the corners'
+  // |distance| along its edge (seed §4.2), kept off the corners so that no
+  // triangle collapses. Leaves are independent: both cores.
+  void place_ratios(std::size_t first, std::size_t end) {
+    const auto& table = cube_cases();
+#pragma omp parallel for schedule(static) num_threads(end - first > 4096 ? threads_ : 1)
+    for (std::size_t l = first; l < end; ++l) {
+      const CubeCase& cc = table[leaf_case_[l]];
+      const auto& corners = cube_corners_[leaf_cube_[l]];
+      auto& er = leaf_edge_ratios_[l];
+      er.fill(0.f);
+      for (int e = 0; e < 12; ++e) {
+        if (!(cc.edge_mask >> e & 1)) continue;
+        const float da = corner_distances_[corners[edge_corner(e, 0)]];
+        const float db = corner_distances_[corners[edge_corner(e, 1)]];
+        er[e] = std::clamp(std::fabs(da) / (std::fabs(da) + std::fabs(db)), 1e-4f, 1.f - 1e-4f);
+      }
+    }
+  }
+
+  // One shared vertex per crossed grid edge, keyed by its lower corner and axis.
+  void share_vertices(std::size_t first, std::size_t end) {
+    const auto& table = cube_cases();
+    // Only the first emission is large enough to show.
+    std::optional<Progress> progress;
+    if (end - first > (1u << 20)) progress.emplace("marching cubes", end - first);
+    // About one new vertex per leaf on a surface.
+    edge_index_.reserve(positions_.size() + 2 * (end - first));
+    reserve_room(&positions_, positions_.size() + 2 * (end - first));
+    for (std::size_t l = first; l < end; ++l) {
+      const CubeCase& cc = table[leaf_case_[l]];
+      auto& ev = leaf_edge_vertices_[l];
+      ev.fill(-1);
+      const std::uint64_t cube_key = cube_keys_[leaf_cube_[l]];
+      for (int e = 0; e < 12; ++e) {
+        if (!(cc.edge_mask >> e & 1)) continue;
+        const std::uint64_t lower = corner_key_of(cube_key, edge_corner(e, 0));
+        const std::int32_t fresh = std::int32_t(positions_.size());
+        const std::int32_t id = edge_index_.insert((lower << 2) | std::uint64_t(e / 4), fresh);
+        if (id == fresh) {
+          int x, y, z;
+          unpack_key(lower, &x, &y, &z);
+          Vec3f p = grid_.corner_position(x, y, z);
+          p[e / 4] += leaf_edge_ratios_[l][e] * h_;
+          positions_.push_back(p);
+        }
+        ev[e] = id;
+      }
+      if (progress && (l - first) % 65536 == 65535) progress->advance(65536);
+    }
+  }
+
+  bool emitting(std::int32_t cube) const {
+    if (cube < 0 || std::size_t(cube) >= leaf_of_.size()) return false;
+    const std::int32_t l = leaf_of_[cube];
+    return l >= 0 && leaf_alive_[l];
+  }
+
+  void kill_leaves(const std::vector<std::int32_t>& dead) {
+    for (std::int32_t l : dead) leaf_alive_[l] = 0, leaf_of_[leaf_cube_[l]] = -1;
+  }
+
+  // Edges of the surface used by one triangle of leaf l: a triangle edge on a
+  // cube face is open when the cube across that face emits nothing (two cubes
+  // sharing a face always join its crossings the same way).
+  void append_open_edges(std::int32_t l, std::vector<OpenEdge>* open) const {
     static const auto face_of = [] {
       std::array<std::array<std::int8_t, 12>, 12> f{};
       for (int i = 0; i < 12; ++i)
         for (int j = 0; j < 12; ++j) f[i][j] = std::int8_t(i == j ? -1 : shared_face(i, j));
       return f;
     }();
-    const auto& table = cube_cases();
-    std::vector<OpenEdge> open;
-    for (std::size_t l = 0; l < leaves.size(); ++l) {
-      const CubeCase& cc = table[leaves.cases[l]];
-      const std::int32_t cube = leaf_cube_[l];
-      for (int t = 0; t < cc.triangle_count; ++t) {
-        if (!(leaves.triangle_masks[l] >> t & 1)) continue;
-        for (int k = 0; k < 3; ++k) {
-          const int e0 = cc.triangles[t][k], e1 = cc.triangles[t][(k + 1) % 3];
-          const int face = face_of[e0][e1];
-          if (face < 0) continue;
-          const std::int32_t n = neighbour(cube, face);
-          if (n >= 0 && emitting_[n]) continue;
-          open.push_back({leaves.edge_vertices[l][e0], leaves.edge_vertices[l][e1], cube, face});
-        }
+    const CubeCase& cc = cube_cases()[leaf_case_[l]];
+    const std::int32_t cube = leaf_cube_[l];
+    const auto& ev = leaf_edge_vertices_[l];
+    for (int t = 0; t < cc.triangle_count; ++t) {
+      if (!(masks_[cube] >> t & 1)) continue;
+      for (int k = 0; k < 3; ++k) {
+        const int e0 = cc.triangles[t][k], e1 = cc.triangles[t][(k + 1) % 3];
+        const int face = face_of[e0][e1];
+        if (face < 0 || emitting(neighbour(cube, face))) continue;
+        open->push_back({ev[e0], ev[e1], cube, face});
       }
     }
-    return open;
+  }
+
+  // Open edges change only at leaves that changed, at live neighbours of dead
+  // leaves, and at leaves that had open edges (a new neighbour may close them):
+  // only those are looked at again.
+  void refresh_open_edges(const std::vector<std::int32_t>& changed, const std::vector<std::int32_t>& dead) {
+    std::vector<std::int32_t> look = changed;
+    for (const OpenEdge& e : open_) look.push_back(leaf_of_[e.cube]);
+    for (std::int32_t l : dead)
+      for (int face = 0; face < 6; ++face) {
+        const std::int32_t n = neighbour(leaf_cube_[l], face);
+        if (emitting(n)) look.push_back(leaf_of_[n]);
+      }
+    std::sort(look.begin(), look.end());
+    look.erase(std::unique(look.begin(), look.end()), look.end());
+    open_.clear();
+    for (std::int32_t l : look)
+      if (l >= 0 && leaf_alive_[l]) append_open_edges(l, &open_);
   }
 
   // The key of the cube across a face; false when that is outside the grid.
@@ -330,8 +562,20 @@ class SurfaceBuilder {
     std::sort(seeds.begin(), seeds.end());
     seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
     const int m = options_.margin;
+    const std::size_t cubes = std::max(seeds.size() * (m > 0 ? 4 : 1), expected_cubes_) * 5 / 4;
+    // The hash tables are filled when reserved: only the seeds' share up front.
     cube_index_.reserve(seeds.size() * (m > 0 ? 4 : 1) * 5 / 4);
     corner_index_.reserve(seeds.size() * 2);
+    reserve_room(&usable_, cubes);
+    reserve_room(&grown_, cubes);
+    reserve_room(&cube_keys_, cubes);
+    reserve_room(&masks_, cubes);
+    reserve_room(&cube_corners_, cubes);
+    reserve_room(&hole_of_, cubes);
+    reserve_room(&corner_keys_, cubes * 2);
+    reserve_room(&corner_distances_, cubes * 2);
+    reserve_room(&corner_nearest_, cubes * 2);
+    reserve_room(&corner_relaxed_, cubes * 2);
     for (std::uint64_t key : seeds) {
       int x, y, z;
       unpack_key(key, &x, &y, &z);
@@ -412,9 +656,9 @@ class SurfaceBuilder {
     todo.erase(std::unique(todo.begin(), todo.end()), todo.end());
     const std::uint8_t relaxed = distance.max_distance > options_.distance.max_distance;
     const std::size_t chunk = 1 << 16;
-    std::vector<Vec3f> queries;
-    std::vector<float> d;
-    std::vector<std::int32_t> nearest;
+    std::vector<Vec3f>& queries = scratch_queries_;
+    std::vector<float>& d = scratch_distances_;
+    std::vector<std::int32_t>& nearest = scratch_nearest_;
     for (std::size_t b = 0; b < todo.size(); b += chunk) {
       const std::size_t e = std::min(todo.size(), b + chunk);
       queries.resize(e - b);
@@ -423,7 +667,7 @@ class SurfaceBuilder {
         unpack_key(corner_keys_[todo[i]], &x, &y, &z);
         queries[i - b] = grid_.corner_position(x, y, z);
       }
-      signed_distances(points_, index_, queries, h_, distance, threads_, &d, &nearest);
+      signed_distances(points_, index_, queries, h_, distance, threads_, &d, &nearest, &distance_scratch_);
       for (std::size_t i = b; i < e; ++i) {
         corner_distances_[todo[i]] = d[i - b];
         corner_relaxed_[todo[i]] = relaxed;
@@ -469,6 +713,7 @@ class SurfaceBuilder {
     return true;
   }
 
+  const std::size_t expected_cubes_;
   const OrientedPoints& points_;
   const ReconstructOptions& options_;
   const int threads_;
@@ -490,8 +735,33 @@ class SurfaceBuilder {
   std::vector<std::uint8_t> grown_;  // added by hole closing
   std::vector<std::int32_t> hole_of_;      // per cube: the hole it was grown into, or -1
   std::vector<std::int32_t> hole_parent_;  // union-find over hole ids
-  std::vector<std::int32_t> leaf_cube_;  // of the last emission
-  std::vector<std::uint8_t> emitting_;   // of the last emission, per cube
+  std::vector<std::int32_t> grown_list_;   // every cube ever grown, in order
+
+  // The surface: leaves and triangles are appended as cubes emit; removal
+  // only marks them, and finish() compacts once.
+  std::vector<std::int32_t> leaf_of_;     // per cube: its leaf, or -1
+  std::vector<std::int32_t> leaf_cube_;
+  std::vector<std::uint8_t> leaf_case_;
+  std::vector<std::uint8_t> leaf_alive_;
+  std::vector<std::array<std::int32_t, 12>> leaf_edge_vertices_;
+  std::vector<std::array<float, 12>> leaf_edge_ratios_;
+  std::vector<std::uint32_t> leaf_first_triangle_;  // its triangles run to the next leaf's first
+  FlatHashMap edge_index_{1 << 16};      // (lower corner, axis) -> vertex
+  std::vector<Vec3f> positions_;
+  std::vector<Triangle> triangles_;
+  std::vector<std::int32_t> triangle_leaf_;
+  std::vector<std::uint8_t> triangle_slot_;  // which of its case's triangles
+  std::vector<std::uint8_t> triangle_alive_;
+  std::size_t live_triangles_ = 0;
+  std::vector<OpenEdge> open_;           // the surface's open edges, kept current
+  UnionFind vertex_sets_{0};
+  std::vector<std::int32_t> scratch_counts_;
+  std::vector<std::uint8_t> scratch_cases_;
+  // Buffers of the corner evaluations, kept across batches and rounds.
+  std::vector<Vec3f> scratch_queries_;
+  std::vector<float> scratch_distances_;
+  std::vector<std::int32_t> scratch_nearest_;
+  DistanceScratch distance_scratch_;
 };
 
 }  // namespace
@@ -510,6 +780,44 @@ std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh) {
   return normals;
 }
 
+namespace {
+
+// Pieces and holes: drops small pieces, closes small holes by marching on into
+// the cubes across them (giving up where a hole stays open), drops pieces
+// again, and lays rim triangles over what marching cubes could not close.
+// Works on the open edges and the cubes around them, never the whole surface,
+// apart from the linear passes that find pieces and compact the result.
+void clean_up(SurfaceBuilder& builder, const ReconstructOptions& options, Reconstruction* result) {
+  ReconstructStats& stats = result->stats;
+  Progress progress("pieces and holes", std::size_t(std::max(0, options.hole_rounds)) + 4);
+  if (options.min_piece > 0.0) stats.triangles_dropped += builder.drop_small_pieces(options.min_piece);
+  progress.advance();
+  const std::size_t max_edges = std::size_t(options.max_hole * options.resolution);
+  if (options.max_hole > 0.0) {
+    for (int round = 0; round < options.hole_rounds; ++round) {
+      progress.advance();
+      if (builder.grow_into_small_holes(max_edges) == 0) break;
+    }
+    builder.give_up_open_growth();
+    stats.cubes_hole_closing = builder.grown_cubes();
+    if (options.min_piece > 0.0) stats.triangles_dropped += builder.drop_small_pieces(options.min_piece);
+  }
+  progress.advance();
+  std::vector<std::array<std::int32_t, 2>> boundary;
+  stats.corners_evaluated = builder.corner_count();
+  builder.finish(&result->leaves, &result->mesh, &boundary);
+  progress.advance();
+  if (options.max_hole > 0.0) {
+    // What marching on could not close gets triangles over its rim.
+    const std::vector<Triangle> patch = fill_small_holes(result->mesh, boundary, max_edges);
+    result->leaves.patch_triangles = patch;
+    result->mesh.triangles.insert(result->mesh.triangles.end(), patch.begin(), patch.end());
+    stats.patch_triangles = patch.size();
+  }
+}
+
+}  // namespace
+
 Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOptions& options) {
   check_points(points);
   Reconstruction result;
@@ -522,46 +830,29 @@ Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOption
     t = now;
     return s;
   };
-  SurfaceBuilder builder(points, options);
+  make_cube_grid(bounds(points.positions), options.resolution);  // checks the resolution first
+  const ReconstructionEstimate estimate =
+      check_resolution_fits(points, options.resolution, options.threads, options.memory_limit);
+  const std::string advice = coarse_input_advice(points, options.resolution);
+  if (!advice.empty()) result.warnings.push_back(advice);
+  SurfaceBuilder builder(points, options, estimate.cubes);
   stats.seconds_index = lap();
   const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
   {
-    Progress progress("signed distances", points.size());
+    // About two corners per cube touched.
+    Progress progress("signed distances", std::size_t(2.0 * estimate.cubes) + 1);
     stats.following_rounds = builder.follow_surface(progress);
   }
   stats.seconds_distances = lap();
   TriangleMesh& mesh = result.mesh;
-  std::vector<std::int32_t> triangle_cube;
-  std::vector<std::uint8_t> triangle_slot;
-  builder.emit(&result.leaves, &mesh, &triangle_cube, &triangle_slot);
+  std::vector<std::int32_t> all(builder.cube_count());
+  std::iota(all.begin(), all.end(), 0);
+  builder.emit(all);
+  builder.find_open_edges();
   stats.seconds_emit = lap();
-  auto drop_pieces = [&] {
-    if (options.min_piece <= 0.0) return;
-    const std::size_t dropped = builder.drop_small_pieces(mesh, triangle_cube, triangle_slot, options.min_piece);
-    stats.triangles_dropped += dropped;
-    if (dropped) builder.emit(&result.leaves, &mesh, &triangle_cube, &triangle_slot);
-  };
-  drop_pieces();
-  if (options.max_hole > 0.0) {
-    const std::size_t max_edges = std::size_t(options.max_hole * options.resolution);
-    for (int round = 0; round < options.hole_rounds; ++round) {
-      const std::size_t grown = builder.grow_into_small_holes(result.leaves, mesh.positions.size(), max_edges);
-      if (grown == 0) break;
-      builder.emit(&result.leaves, &mesh, &triangle_cube, &triangle_slot);
-    }
-    if (builder.give_up_open_growth(result.leaves) > 0)
-      builder.emit(&result.leaves, &mesh, &triangle_cube, &triangle_slot);
-    stats.cubes_hole_closing = builder.grown_cubes();
-    drop_pieces();
-    // What marching on could not close gets triangles over its rim.
-    const std::vector<Triangle> patch = fill_small_holes(mesh, max_edges);
-    result.leaves.patch_triangles = patch;
-    mesh.triangles.insert(mesh.triangles.end(), patch.begin(), patch.end());
-    stats.patch_triangles = patch.size();
-  }
+  clean_up(builder, options, &result);
   stats.seconds_cleanup = lap();
   stats.cubes_touched = builder.usable_cubes();
-  stats.corners_evaluated = builder.corner_count();
   stats.cubes_emitting = result.leaves.size();
 
   mesh.normals = vertex_normals(mesh);

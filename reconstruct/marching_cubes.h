@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace scan2lod {
@@ -37,6 +38,10 @@ struct ReconstructOptions {
   int hole_rounds = 4;  // rings of cubes a hole is closed by from each side, at most
   SignedDistanceOptions distance;
   int threads = 0;       // 0: all cores
+  // Memory the reconstruction may take, in bytes; 0: the machine's
+  // (resolution_guard.h). A resolution whose estimate exceeds it is refused
+  // before the grid is built.
+  double memory_limit = 0;
 };
 
 // The leaf cube nodes (seed §4.3.2, §5.1): every cube that emits triangles, with
@@ -80,10 +85,12 @@ struct Reconstruction {
   TriangleMesh mesh;  // vertices with normals (and colours if the points had them)
   CubeNodes leaves;
   ReconstructStats stats;
+  std::vector<std::string> warnings;  // advice for the user, e.g. a grid far finer than the data
 };
 
 // @param[in] points  oriented points, normals outward; positions must be finite
-// Throws InputError for no points, non-finite points, or a bad resolution.
+// Throws InputError for no points, non-finite points, a bad resolution, or one
+// whose estimated memory exceeds options.memory_limit (check_resolution_fits).
 Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOptions& options = {});
 
 // Area-weighted vertex normals of a mesh (unit length; zero for unused vertices).

@@ -63,13 +63,19 @@ void PointIndex::knn(const Vec3f* queries, std::size_t count, int k, std::int32_
 void signed_distances(const OrientedPoints& points, const PointIndex& index,
                       const std::vector<Vec3f>& queries, float cube_size,
                       const SignedDistanceOptions& options, int threads,
-                      std::vector<float>* distance, std::vector<std::int32_t>* nearest) {
+                      std::vector<float>* distance, std::vector<std::int32_t>* nearest,
+                      DistanceScratch* scratch) {
   const std::size_t n = queries.size();
   const int k = options.method == DistanceMethod::planes
                     ? std::max(1, std::min<int>(options.neighbours, int(points.size())))
                     : 1;
-  std::vector<std::int32_t> idx(n * std::size_t(k));
-  std::vector<float> d2(n * std::size_t(k));
+  DistanceScratch local;
+  DistanceScratch& buffers = scratch ? *scratch : local;
+  std::vector<std::int32_t>& idx = buffers.indices;
+  std::vector<float>& d2 = buffers.squared_distances;
+  // Not value-initialised: knn writes every entry.
+  if (idx.size() < n * std::size_t(k)) idx.resize(n * std::size_t(k));
+  if (d2.size() < n * std::size_t(k)) d2.resize(n * std::size_t(k));
   index.knn(queries.data(), n, k, idx.data(), d2.data(), threads);
   distance->assign(n, std::numeric_limits<float>::quiet_NaN());
   nearest->assign(n, -1);

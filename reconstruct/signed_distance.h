@@ -56,10 +56,17 @@ class PointIndex {
 // @param[in]  cube_size  the grid's cube edge length
 // @param[out] distance   #Q signed distances; NaN where undefined
 // @param[out] nearest    #Q indices of the closest point (for attributes)
+// @param[in,out] scratch    optional buffers kept between calls by a caller
+//                           that queries in many batches (no page faults anew)
+struct DistanceScratch {
+  std::vector<std::int32_t> indices;
+  std::vector<float> squared_distances;
+};
 void signed_distances(const OrientedPoints& points, const PointIndex& index,
                       const std::vector<Vec3f>& queries, float cube_size,
                       const SignedDistanceOptions& options, int threads,
-                      std::vector<float>* distance, std::vector<std::int32_t>* nearest);
+                      std::vector<float>* distance, std::vector<std::int32_t>* nearest,
+                      DistanceScratch* scratch = nullptr);
 
 }  // namespace scan2lod
 

@@ -45,8 +45,9 @@ TEST(Bunny, MeanSurfaceDistanceIsUnderThreeHundredthsOfAPercent) {
   if (!std::filesystem::exists(kReference)) GTEST_SKIP() << "needs ../shared";
   const SurfaceComparison& c = bunny_run().c;
   const double two_sided = 0.5 * (c.a_to_b.mean + c.b_to_a.mean);
-  EXPECT_LT(two_sided, 0.0003 * c.diagonal);
-  EXPECT_LT(c.a_to_b.p95, 0.001 * c.diagonal);
+  // Issue 14's "no loss": 0.0249 % and 0.0707 % when the clean-up was made incremental.
+  EXPECT_LE(two_sided, 0.00026 * c.diagonal);
+  EXPECT_LE(c.a_to_b.p95, 0.00075 * c.diagonal);
 }
 
 TEST(Bunny, OnePieceAndNoHolesButTheDatasOwn) {
@@ -55,6 +56,7 @@ TEST(Bunny, OnePieceAndNoHolesButTheDatasOwn) {
   EXPECT_EQ(t.components, 1u);
   // The reference has the scans' own holes under the base (5 loops).
   EXPECT_LE(t.boundary_loops, bunny_run().c.b.boundary_loops + 5);
+  EXPECT_LE(t.boundary_loops, 5u);
   EXPECT_EQ(t.non_manifold_edges, 0u);
   EXPECT_EQ(t.degenerate_triangles, 0u);
   // Marching cubes at R = 256 over the bunny's ~0.057 m^2.

@@ -1,0 +1,379 @@
+#include "acquisition/point_cloud_files.h"
+
+#include "core/error.h"
+#include "io/atomic_file.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+namespace scan2lod {
+namespace {
+
+// A line as it may appear in a message: bounded and printable.
+std::string shown(const std::string& line) {
+  std::string s = line.substr(0, 60);
+  for (char& c : s)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return line.size() > 60 ? s + "..." : s;
+}
+
+bool little_endian() {
+  const std::uint16_t one = 1;
+  unsigned char first;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
+}
+
+std::string read_whole(const std::string& path, std::size_t offset = 0) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open file");
+  in.seekg(std::streamoff(offset));
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// ---------------------------------------------------------------------------
+// PLY
+
+enum class Scalar { i8, u8, i16, u16, i32, u32, f32, f64 };
+
+bool scalar_type(const std::string& t, Scalar* s) {
+  static const std::pair<const char*, Scalar> names[] = {
+      {"char", Scalar::i8},   {"int8", Scalar::i8},     {"uchar", Scalar::u8},   {"uint8", Scalar::u8},
+      {"short", Scalar::i16}, {"int16", Scalar::i16},   {"ushort", Scalar::u16}, {"uint16", Scalar::u16},
+      {"int", Scalar::i32},   {"int32", Scalar::i32},   {"uint", Scalar::u32},   {"uint32", Scalar::u32},
+      {"float", Scalar::f32}, {"float32", Scalar::f32}, {"double", Scalar::f64}, {"float64", Scalar::f64}};
+  for (const auto& [name, scalar] : names)
+    if (t == name) return *s = scalar, true;
+  return false;
+}
+
+std::size_t scalar_size(Scalar s) {
+  switch (s) {
+    case Scalar::i8: case Scalar::u8: return 1;
+    case Scalar::i16: case Scalar::u16: return 2;
+    case Scalar::i32: case Scalar::u32: case Scalar::f32: return 4;
+    case Scalar::f64: return 8;
+  }
+  return 0;
+}
+
+struct VertexLayout {
+  enum class Format { ascii, binary_le, binary_be } format = Format::ascii;
+  std::size_t header_bytes = 0;
+  std::size_t vertices = 0;
+  std::vector<Scalar> types;
+  std::vector<std::size_t> offsets;  // bytes into a binary vertex
+  std::size_t stride = 0;
+  int xyz[3] = {-1, -1, -1}, normal[3] = {-1, -1, -1}, rgb[3] = {-1, -1, -1};  // property slots
+};
+
+// Which of the roles a vertex property plays: 0-2 position, 3-5 normal, 6-8 colour.
+int property_role(const std::string& name) {
+  static const char* roles[9][3] = {{"x", "x", "x"},
+                                    {"y", "y", "y"},
+                                    {"z", "z", "z"},
+                                    {"nx", "normal_x", "normalx"},
+                                    {"ny", "normal_y", "normaly"},
+                                    {"nz", "normal_z", "normalz"},
+                                    {"red", "r", "diffuse_red"},
+                                    {"green", "g", "diffuse_green"},
+                                    {"blue", "b", "diffuse_blue"}};
+  for (int r = 0; r < 9; ++r)
+    for (const char* n : roles[r])
+      if (name == n) return r;
+  return -1;
+}
+
+// The header is parsed here so that each complaint names the line.
+VertexLayout read_vertex_layout(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open file");
+  VertexLayout L;
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("ply", 0) != 0)
+    throw InputError(path, "not a PLY file (the first line must be 'ply')");
+  L.header_bytes = line.size() + 1;
+  std::string element;
+  bool seen_vertex = false, after_vertex = false, ended = false, seen_format = false;
+  for (std::size_t n = 2; !ended && std::getline(in, line); ++n) {
+    L.header_bytes += line.size() + 1;
+    if (n > 10000) throw InputError(path, "PLY header has no 'end_header' in 10000 lines");
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream ls(line);
+    std::string key;
+    ls >> key;
+    auto fail = [&](const std::string& what) {
+      throw InputError(path, "header line " + std::to_string(n) + " ('" + shown(line) + "'): " + what);
+    };
+    if (key == "format") {
+      std::string f;
+      ls >> f;
+      seen_format = true;
+      if (f == "ascii") L.format = VertexLayout::Format::ascii;
+      else if (f == "binary_little_endian") L.format = VertexLayout::Format::binary_le;
+      else if (f == "binary_big_endian") L.format = VertexLayout::Format::binary_be;
+      else fail("expected ascii, binary_little_endian or binary_big_endian");
+    } else if (key == "element") {
+      long long count = -1;
+      ls >> element >> count;
+      if (count < 0) fail("expected 'element NAME COUNT' with COUNT >= 0");
+      if (seen_vertex && element != "vertex") after_vertex = true;
+      if (element == "vertex") {
+        if (seen_vertex) fail("element 'vertex' appears twice");
+        if (count > 0x7fffffffLL) fail("more than 2^31 vertices");
+        seen_vertex = true;
+        L.vertices = std::size_t(count);
+      } else if (element == "face" && count > 0) {
+        fail("the file has faces: a mesh, not a point cloud");
+      } else if (!seen_vertex && count > 0) {
+        fail("element '" + element + "' before the vertices; a point cloud PLY starts with its vertices");
+      }
+    } else if (key == "property") {
+      std::string type, name;
+      ls >> type >> name;
+      if (element != "vertex" || after_vertex) continue;  // other elements are not read
+      Scalar s;
+      if (type == "list") fail("vertex properties must be scalars");
+      if (!scalar_type(type, &s)) fail("unknown property type '" + type + "'");
+      const int role = property_role(name);
+      const int slot = int(L.types.size());
+      if (role >= 0) {
+        int* target = role < 3 ? &L.xyz[role] : role < 6 ? &L.normal[role - 3] : &L.rgb[role - 6];
+        if (*target >= 0) fail("property '" + name + "' given twice");
+        if (role < 6 && s != Scalar::f32 && s != Scalar::f64) fail("'" + name + "' must be float or double");
+        *target = slot;
+      }
+      L.types.push_back(s);
+      L.offsets.push_back(L.stride);
+      L.stride += scalar_size(s);
+    } else if (key == "end_header") {
+      ended = true;
+    } else if (key != "comment" && key != "obj_info" && !key.empty()) {
+      fail("unknown keyword '" + shown(key) + "'");
+    }
+  }
+  if (!ended) throw InputError(path, "PLY header ends before 'end_header'");
+  if (!seen_format) throw InputError(path, "PLY header has no 'format' line");
+  if (!seen_vertex || L.vertices == 0) throw InputError(path, "PLY file has no vertices");
+  if (L.xyz[0] < 0 || L.xyz[1] < 0 || L.xyz[2] < 0)
+    throw InputError(path, "element vertex lacks a float x, y or z property");
+  const bool normals = L.normal[0] >= 0 || L.normal[1] >= 0 || L.normal[2] >= 0;
+  if (normals && (L.normal[0] < 0 || L.normal[1] < 0 || L.normal[2] < 0))
+    throw InputError(path, "element vertex has some of nx, ny, nz but not all three");
+  const bool colors = L.rgb[0] >= 0 || L.rgb[1] >= 0 || L.rgb[2] >= 0;
+  if (colors && (L.rgb[0] < 0 || L.rgb[1] < 0 || L.rgb[2] < 0 || L.types[L.rgb[0]] != Scalar::u8 ||
+                 L.types[L.rgb[1]] != Scalar::u8 || L.types[L.rgb[2]] != Scalar::u8))
+    L.rgb[0] = L.rgb[1] = L.rgb[2] = -1;  // partial or non-byte colour: ignored
+  return L;
+}
+
+double decode(const unsigned char* p, Scalar s, bool swap) {
+  unsigned char b[8];
+  const std::size_t n = scalar_size(s);
+  for (std::size_t i = 0; i < n; ++i) b[i] = swap ? p[n - 1 - i] : p[i];
+  switch (s) {
+    case Scalar::i8: return double(std::int8_t(b[0]));
+    case Scalar::u8: return double(b[0]);
+    case Scalar::i16: { std::int16_t v; std::memcpy(&v, b, 2); return v; }
+    case Scalar::u16: { std::uint16_t v; std::memcpy(&v, b, 2); return v; }
+    case Scalar::i32: { std::int32_t v; std::memcpy(&v, b, 4); return v; }
+    case Scalar::u32: { std::uint32_t v; std::memcpy(&v, b, 4); return v; }
+    case Scalar::f32: { float v; std::memcpy(&v, b, 4); return v; }
+    case Scalar::f64: { double v; std::memcpy(&v, b, 8); return v; }
+  }
+  return 0.0;
+}
+
+// Stores vertex i's decoded property values into the cloud.
+void store_vertex(const VertexLayout& L, const double* values, std::size_t i, PointCloud* cloud) {
+  cloud->positions[i] = Vec3f(float(values[L.xyz[0]]), float(values[L.xyz[1]]), float(values[L.xyz[2]]));
+  if (!cloud->normals.empty())
+    cloud->normals[i] = Vec3f(float(values[L.normal[0]]), float(values[L.normal[1]]), float(values[L.normal[2]]));
+  if (!cloud->colors.empty())
+    for (int c = 0; c < 3; ++c) cloud->colors[i][c] = std::uint8_t(std::clamp(values[L.rgb[c]], 0.0, 255.0));
+}
+
+// Splits text into lines lazily; `number` counts from 1.
+struct LineReader {
+  const std::string& text;
+  std::size_t at = 0, number = 0;
+  bool next(std::string_view* line) {
+    if (at >= text.size()) return false;
+    std::size_t end = text.find('\n', at);
+    if (end == std::string::npos) end = text.size();
+    *line = std::string_view(text).substr(at, end - at);
+    if (!line->empty() && line->back() == '\r') line->remove_suffix(1);
+    at = end + 1;
+    ++number;
+    return true;
+  }
+};
+
+// Parses the blank-separated numbers of a line into values (at most max);
+// returns how many there were, or -1 for a token that is not a number.
+int parse_numbers(std::string_view line, double* values, int max) {
+  int count = 0;
+  std::size_t at = 0;
+  while (true) {
+    while (at < line.size() && (line[at] == ' ' || line[at] == '\t' || line[at] == ',')) ++at;
+    if (at >= line.size()) return count;
+    std::size_t end = at;
+    while (end < line.size() && line[end] != ' ' && line[end] != '\t' && line[end] != ',') ++end;
+    double v;
+    const char* first = line.data() + at;
+    if (*first == '+') ++first;
+    auto [ptr, ec] = std::from_chars(first, line.data() + end, v);
+    if (ec != std::errc() || ptr != line.data() + end) return -1;
+    if (count < max) values[count] = v;
+    ++count;
+    at = end;
+  }
+}
+
+void read_ply_body(const std::string& path, const VertexLayout& L, PointCloud* cloud) {
+  const std::size_t n = L.vertices;
+  std::vector<double> values(L.types.size());
+  if (L.format == VertexLayout::Format::ascii) {
+    const std::string text = read_whole(path, L.header_bytes);
+    LineReader lines{text};
+    std::string_view line;
+    for (std::size_t i = 0; i < n; ++i) {
+      do {
+        if (!lines.next(&line))
+          throw InputError(path, "file ends at vertex " + std::to_string(i) + " of " + std::to_string(n) +
+                                     " (truncated)");
+      } while (line.find_first_not_of(" \t") == std::string_view::npos);
+      const int count = parse_numbers(line, values.data(), int(values.size()));
+      if (count != int(values.size()))
+        throw InputError(path, "vertex " + std::to_string(i) + " needs " + std::to_string(values.size()) +
+                                   " numbers, got '" + shown(std::string(line)) + "'");
+      store_vertex(L, values.data(), i, cloud);
+    }
+    return;
+  }
+  std::error_code ec;
+  const std::uint64_t size = std::filesystem::file_size(path, ec);
+  const std::uint64_t need = std::uint64_t(n) * L.stride;
+  if (ec || size < L.header_bytes || size - L.header_bytes < need)
+    throw InputError(path, "binary data holds fewer bytes than the header's " + std::to_string(n) +
+                               " vertices need (" + std::to_string(need) + "): truncated");
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(std::streamoff(L.header_bytes));
+  std::vector<unsigned char> body(need);
+  if (!in.read(reinterpret_cast<char*>(body.data()), std::streamsize(need)))
+    throw InputError(path, "could not read the vertex data");
+  const bool swap = (L.format == VertexLayout::Format::binary_be) == little_endian();
+  for (std::size_t i = 0; i < n; ++i) {
+    const unsigned char* v = &body[i * L.stride];
+    for (std::size_t k = 0; k < L.types.size(); ++k) values[k] = decode(v + L.offsets[k], L.types[k], swap);
+    store_vertex(L, values.data(), i, cloud);
+  }
+}
+
+}  // namespace
+
+PointCloud read_point_cloud_ply(const std::string& path) {
+  const VertexLayout L = read_vertex_layout(path);
+  // The header's count must fit the file before anything is sized by it:
+  // a binary vertex takes its stride, an ASCII one a character and a blank per value.
+  std::error_code ec;
+  const std::uint64_t size = std::filesystem::file_size(path, ec);
+  const std::uint64_t body = ec || size < L.header_bytes ? 0 : size - L.header_bytes;
+  const std::uint64_t least = L.format == VertexLayout::Format::ascii ? 2 * L.types.size() : L.stride;
+  if (std::uint64_t(L.vertices) > body / std::max<std::uint64_t>(least, 1))
+    throw InputError(path, "the header promises " + std::to_string(L.vertices) + " vertices, the file's " +
+                               std::to_string(body) + " bytes of data cannot hold them (truncated)");
+  PointCloud cloud;
+  cloud.source = path;
+  cloud.positions.resize(L.vertices);
+  if (L.normal[0] >= 0) cloud.normals.resize(L.vertices);
+  if (L.rgb[0] >= 0) cloud.colors.resize(L.vertices);
+  read_ply_body(path, L, &cloud);
+  return cloud;
+}
+
+PointCloud read_point_cloud_text(const std::string& path) {
+  const std::string text = read_whole(path);
+  PointCloud cloud;
+  cloud.source = path;
+  LineReader lines{text};
+  std::string_view line;
+  int columns = 0;  // of the first data line
+  bool normals = false, colors = false;
+  double v[10];
+  while (lines.next(&line)) {
+    const std::size_t first = line.find_first_not_of(" \t");
+    if (first == std::string_view::npos || line[first] == '#' || line.substr(first, 2) == "//") continue;
+    const int count = parse_numbers(line, v, 10);
+    auto fail = [&](const std::string& what) {
+      throw InputError(path, "line " + std::to_string(lines.number) + " ('" + shown(std::string(line)) +
+                                 "'): " + what);
+    };
+    if (count < 0) fail("expected numbers only");
+    if (columns == 0) {
+      // A .pts file starts with its point count.
+      if (count == 1 && cloud.positions.empty() && v[0] >= 0 && v[0] == std::floor(v[0])) continue;
+      if (count != 3 && count != 4 && count != 6 && count != 7 && count != 9)
+        fail("expected 3 (x y z), 4 (x y z i), 6 (x y z nx ny nz, or x y z r g b), 7 (x y z i r g b) or "
+             "9 (x y z nx ny nz r g b) values, got " + std::to_string(count));
+      columns = count;
+      const double length = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+      normals = count == 9 || (count == 6 && std::fabs(length - 1.0) < 0.01);
+      colors = count == 7 || count == 9 || (count == 6 && !normals);
+    }
+    if (count != columns)
+      fail("has " + std::to_string(count) + " values, the first point had " + std::to_string(columns));
+    cloud.positions.emplace_back(float(v[0]), float(v[1]), float(v[2]));
+    if (normals) cloud.normals.emplace_back(float(v[3]), float(v[4]), float(v[5]));
+    if (colors) {
+      const int c0 = columns == 6 ? 3 : columns - 3;
+      Rgb rgb;
+      for (int c = 0; c < 3; ++c) {
+        if (!(v[c0 + c] >= 0 && v[c0 + c] <= 255)) fail("colour values must lie in 0 to 255");
+        rgb[c] = std::uint8_t(v[c0 + c] + 0.5);
+      }
+      cloud.colors.push_back(rgb);
+    }
+  }
+  if (cloud.positions.empty()) throw InputError(path, "holds no points (expected lines of 'x y z ...')");
+  return cloud;
+}
+
+void write_point_cloud_ply(const std::string& path, const PointCloud& cloud) {
+  const bool normals = cloud.normals.size() == cloud.size() && cloud.size() > 0;
+  const bool colors = cloud.colors.size() == cloud.size() && cloud.size() > 0;
+  write_atomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    out << "ply\nformat binary_little_endian 1.0\nelement vertex " << cloud.size()
+        << "\nproperty float x\nproperty float y\nproperty float z\n";
+    if (normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
+    if (colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    out << "end_header\n";
+    const bool swap = !little_endian();
+    std::vector<char> record;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      record.clear();
+      auto put = [&](const float* p) {
+        for (int k = 0; k < 3; ++k) {
+          char b[4];
+          std::memcpy(b, &p[k], 4);
+          if (swap) std::reverse(b, b + 4);
+          record.insert(record.end(), b, b + 4);
+        }
+      };
+      put(cloud.positions[i].data());
+      if (normals) put(cloud.normals[i].data());
+      if (colors) record.insert(record.end(), cloud.colors[i].begin(), cloud.colors[i].end());
+      out.write(record.data(), std::streamsize(record.size()));
+    }
+    if (!out) throw InputError(path, "could not write the point cloud");
+  });
+}
+
+}  // namespace scan2lod

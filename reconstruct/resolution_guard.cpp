@@ -1,0 +1,131 @@
+#include "reconstruct/resolution_guard.h"
+
+#include "core/error.h"
+#include "reconstruct/cube_grid.h"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+namespace scan2lod {
+namespace {
+
+// Measured on the bunny scans (bench/REPORT.md, reconstruct() at R = 64 ... 512):
+// cubes touched per cube of surface found at the coarse grid, and the peak memory
+// and time per touched cube and per point.
+constexpr double kCubesPerCoarseCell = 1.1;
+constexpr double kBytesPerCube = 700.0;
+constexpr double kBytesPerPoint = 120.0;  // positions, normals, spacing, kd-tree
+constexpr double kFixedBytes = 48.0 * 1024 * 1024;
+constexpr double kCoreSecondsPerCube = 12e-6;
+constexpr double kCoreSecondsPerPoint = 1.5e-6;
+
+// Occupied cells of the grid of `resolution` over the points.
+std::size_t occupied_cells(const std::vector<Vec3f>& positions, const CubeGrid& grid) {
+  std::vector<std::uint64_t> keys(positions.size());
+  const int R = grid.resolution;
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const Vec3d g = (positions[i].cast<double>() - grid.origin) / grid.cube_size;
+    int c[3];
+    for (int a = 0; a < 3; ++a) c[a] = std::clamp(int(std::floor(g[a])), 0, R - 1);
+    keys[i] = pack_key(c[0], c[1], c[2]);
+  }
+  std::sort(keys.begin(), keys.end());
+  return std::size_t(std::unique(keys.begin(), keys.end()) - keys.begin());
+}
+
+std::string gigabytes(double bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, bytes >= 1e9 ? "%.1f GB" : "%.0f MB", bytes >= 1e9 ? bytes / 1e9 : bytes / 1e6);
+  return text;
+}
+
+std::string duration(double seconds) {
+  char text[32];
+  if (seconds < 120) std::snprintf(text, sizeof text, "%.0f s", std::max(1.0, seconds));
+  else if (seconds < 7200) std::snprintf(text, sizeof text, "%.0f min", seconds / 60);
+  else std::snprintf(text, sizeof text, "%.0f h", seconds / 3600);
+  return text;
+}
+
+double cgroup_limit() {
+  for (const char* path : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    std::ifstream in(path);
+    double value;
+    if (in >> value && value > 0) return value;  // "max" fails to parse: no limit
+  }
+  return 0;
+}
+
+}  // namespace
+
+ReconstructionEstimate estimate_reconstruction(const OrientedPoints& points, int resolution, int threads) {
+  ReconstructionEstimate e;
+  e.resolution = resolution;
+  if (points.size() == 0) return e;
+  const Aabb box = bounds(points.positions);
+  // The coarse grid must be sampled densely enough to show the whole surface:
+  // a few points per occupied cell, else a coarser one.
+  int coarse = 64;
+  std::size_t cells = 0;
+  for (;; coarse /= 2) {
+    cells = occupied_cells(points.positions, make_cube_grid(box, coarse));
+    if (coarse == kMinResolution || double(points.size()) >= 4.0 * double(cells)) break;
+  }
+  const double scale = double(resolution - 8) / double(coarse - 8);
+  e.cubes = kCubesPerCoarseCell * double(cells) * scale * scale;
+  const double n = double(points.size());
+  e.bytes = kFixedBytes + kBytesPerPoint * n + kBytesPerCube * e.cubes;
+  const int cores = threads > 0 ? threads : omp_get_max_threads();
+  e.seconds = (kCoreSecondsPerCube * e.cubes + kCoreSecondsPerPoint * n) / std::max(1, cores);
+  return e;
+}
+
+double machine_memory_bytes() {
+  const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  const double limit = cgroup_limit();
+  return limit > 0 && limit < physical ? limit : physical;
+}
+
+ReconstructionEstimate check_resolution_fits(const OrientedPoints& points, int resolution, int threads,
+                                             double memory_bytes) {
+  if (memory_bytes <= 0) memory_bytes = machine_memory_bytes();
+  const ReconstructionEstimate e = estimate_reconstruction(points, resolution, threads);
+  if (e.bytes <= memory_bytes) return e;
+  int fits = resolution;
+  while (fits > kMinResolution && estimate_reconstruction(points, fits, threads).bytes > memory_bytes) fits /= 2;
+  const bool any = estimate_reconstruction(points, fits, threads).bytes <= memory_bytes;
+  throw InputError("", "resolution " + std::to_string(resolution) + " would need about " + gigabytes(e.bytes) +
+                           " of memory (" + std::to_string(std::llround(e.cubes / 1e6)) + " M cubes over the surface, " +
+                           duration(e.seconds) + ") and this machine has " + gigabytes(memory_bytes) +
+                           (any ? "; the largest resolution that fits is " + std::to_string(fits) +
+                                      " (about " + gigabytes(estimate_reconstruction(points, fits, threads).bytes) + ")"
+                                : "; not even resolution " + std::to_string(kMinResolution) + " fits"));
+}
+
+std::string coarse_input_advice(const OrientedPoints& points, int resolution) {
+  if (points.spacing.size() != points.size() || points.size() == 0) return "";
+  std::vector<float> spacing = points.spacing;
+  std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
+  const double median = spacing[spacing.size() / 2];
+  const double extent = bounds(points.positions).extent().cast<double>().maxCoeff();
+  const double cube = extent / double(resolution - 8);
+  // Vertices more than 4 cubes apart: the cubes between them only re-sample flat triangles.
+  if (!(median > 4.0 * cube)) return "";
+  int suggested = kMinResolution;
+  while (suggested < resolution && extent / double(2 * suggested - 8) >= median) suggested *= 2;
+  suggested = std::min(resolution, 2 * suggested);  // cubes of half to one vertex spacing
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "the input's points lie %.1f cubes apart (median spacing %.3g against cube size %.3g at "
+                "resolution %d): the grid fills the surface between them with many more triangles "
+                "without adding detail; --resolution %d matches the point spacing",
+                median / cube, median, cube, resolution, suggested);
+  return text;
+}
+
+}  // namespace scan2lod
