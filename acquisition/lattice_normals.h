@@ -1,4 +1,4 @@
-// Range image -> oriented points (seed 003 §4.2, Fig. 4.2). Each sample's normal
+// Range image -> oriented points (Lee 2007, §4.2, Fig. 4.2). Each sample's normal
 // is the average of the normals of the up to four triangles it forms with its
 // 4-neighbours in the lattice, turned toward the scanner (+z in the scan frame).
 #pragma once

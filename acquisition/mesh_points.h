@@ -1,4 +1,4 @@
-// A mesh as range data (seed 003 §4.3.1, §6.3): "We took the vertex of the
+// A mesh as range data (Lee 2007, §4.3.1, §6.3): "We took the vertex of the
 // mesh as the point and the average of this vertex's adjacent triangles'
 // normal as the normal of this point."
 #pragma once

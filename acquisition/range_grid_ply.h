@@ -1,5 +1,5 @@
 // Stanford range-grid PLY files and the .conf files that place them
-// (seed 003 §4.3.1). Reading and writing go through PCL's PLY reader/writer,
+// (Lee 2007, §4.3.1). Reading and writing go through PCL's PLY reader/writer,
 // which understands `element range_grid`; this layer adds validation and
 // messages a user can act on.
 #pragma once

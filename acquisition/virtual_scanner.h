@@ -1,4 +1,4 @@
-// Range images generated from a mesh (seed 003 §4.4, §6.3: "The input data
+// Range images generated from a mesh (Lee 2007, §4.4, §6.3: "The input data
 // are generated from mesh models instead of range scanner"). Each view is an
 // orthographic range camera, like a Cyberware scanner sweeping parallel rays:
 // the scan frame has the scanner on its +z side looking along -z, x to the

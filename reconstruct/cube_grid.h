@@ -1,5 +1,5 @@
 // The cubic grid that marching cubes runs on: R cubes per side over the bounding
-// cube of the data (seed 003 §4.4), addressed sparsely by packed integer keys.
+// cube of the data (Lee 2007, §4.4), addressed sparsely by packed integer keys.
 #pragma once
 
 #include "core/types.h"

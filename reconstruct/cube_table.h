@@ -1,5 +1,5 @@
 // The marching-cubes case table, generated rather than transcribed so that it is
-// topologically consistent by construction (seed 003 §4.2 uses the classic
+// topologically consistent by construction (Lee 2007, §4.2 uses the classic
 // 15-case table, whose complementary cases disagree on ambiguous faces and leave
 // holes).
 //

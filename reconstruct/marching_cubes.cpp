@@ -429,7 +429,7 @@ class SurfaceBuilder {
   }
 
   // Fills the leaves' edge_ratios: each vertex at the ratio of the corners'
-  // |distance| along its edge (seed §4.2), kept off the corners so that no
+  // |distance| along its edge (Lee 2007, §4.2), kept off the corners so that no
   // triangle collapses. Leaves are independent: both cores.
   void place_ratios(std::size_t first, std::size_t end) {
     const auto& table = cube_cases();

@@ -1,5 +1,5 @@
 // Oriented points -> indexed triangle mesh by ratio-based marching cubes over a
-// sparse grid (seed 003 §4.2-4.3). Each vertex sits on its cube edge at the ratio
+// sparse grid (Lee 2007, §4.2-4.3). Each vertex sits on its cube edge at the ratio
 // of the two corners' |signed distance|, not at the midpoint.
 //
 // Only cubes near data are touched: cubes that hold points (grown by `margin`),
@@ -44,7 +44,7 @@ struct ReconstructOptions {
   double memory_limit = 0;
 };
 
-// The leaf cube nodes (seed §4.3.2, §5.1): every cube that emits triangles, with
+// The leaf cube nodes (Lee 2007, §4.3.2, §5.1): every cube that emits triangles, with
 // what the octree needs to build its parents. Flat arrays, one entry per cube;
 // corner data is shared between cubes through corner indices.
 struct CubeNodes {

@@ -1,4 +1,4 @@
-// Signed distance from oriented points at cube corners (seed 003 §4.2), with the
+// Signed distance from oriented points at cube corners (Lee 2007, §4.2), with the
 // closest points found by FLANN's exact kd-tree. Positive outside, negative inside.
 #pragma once
 
@@ -11,7 +11,7 @@
 namespace scan2lod {
 
 enum class DistanceMethod {
-  seed,    // sign((v - p)·n_p) * |v - p| with p the closest point (seed §4.2)
+  seed,    // sign((v - p)·n_p) * |v - p| with p the closest point (Lee 2007, §4.2)
   hoppe,   // (v - p)·n_p, the closest point's tangent plane (Hoppe et al. 1992)
   planes,  // Gaussian-weighted mean of the k closest points' tangent-plane distances
 };

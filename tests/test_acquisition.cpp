@@ -1,4 +1,4 @@
-// Range images in (seed 003 §4.2-4.3): Stanford range grids, .conf poses,
+// Range images in (Lee 2007, §4.2-4.3): Stanford range grids, .conf poses,
 // organized clouds, lattice normals, and clear errors for bad input.
 #include "acquisition/lattice_normals.h"
 #include "acquisition/load_inputs.h"

@@ -1,4 +1,4 @@
-// Closed shapes stay closed (seed 003 §4.4: range images generated from
+// Closed shapes stay closed (Lee 2007, §4.4: range images generated from
 // meshes): a sphere and a torus, virtually scanned from 14 views, come back as
 // closed 2-manifolds with the right Euler characteristic, on the surface.
 #include "acquisition/lattice_normals.h"

@@ -1,4 +1,4 @@
-// Claims of seed 003 §4.2 on shapes with known answers.
+// Claims of Lee 2007, §4.2 on shapes with known answers.
 #include "measure/topology.h"
 #include "reconstruct/cube_table.h"
 #include "reconstruct/hole_filling.h"

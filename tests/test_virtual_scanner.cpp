@@ -1,4 +1,4 @@
-// Range data from meshes (seed 003 §4.3.1, §4.4, §6.3): mesh vertices as
+// Range data from meshes (Lee 2007, §4.3.1, §4.4, §6.3): mesh vertices as
 // oriented points, and virtual orthographic range scans of a known sphere.
 #include "acquisition/mesh_points.h"
 #include "acquisition/range_grid_ply.h"

@@ -1,4 +1,4 @@
-// The octree cells behind a level of detail (seed 003 §5.1, Fig. 5.4): the cut
+// The octree cells behind a level of detail (Lee 2007, §5.1, Fig. 5.4): the cut
 // through the marching-cube octree that `priority` expansions leave, each cell
 // drawn as a cube outline coloured by its level, so a user sees where the
 // detail goes. The one place in visualize/ that reads the octree's arrays
@@ -30,7 +30,7 @@ vtkSmartPointer<vtkPolyData> cell_outlines(const McOctree& tree, const std::vect
 std::vector<std::int32_t> lod_cut(const LodModel& model, std::size_t priority);
 vtkSmartPointer<vtkPolyData> cell_outlines(const LodModel& model, const std::vector<std::int32_t>& nodes);
 
-// The octree's priority series (seed 003 Figs. 6.6-6.8), empty without one:
+// The octree's priority series (Lee 2007, Figs. 6.6-6.8), empty without one:
 // the LOD metric of the node each priority number expands, and the triangles
 // after each number of expansions (lod.accumulated, full() + 1 entries).
 struct OctreeSeries {
