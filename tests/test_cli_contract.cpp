@@ -153,5 +153,18 @@ TEST(CliContract, ObjKeepsVertexColours) {
   EXPECT_EQ(back.triangles, mesh.triangles);
 }
 
+// Every mesh format read_mesh reads is an input the README promises.
+TEST(CliContract, AVtpMeshIsAnInput) {
+  const fs::path dir = scratch() / "vtp";
+  fs::create_directories(dir);
+  const CliRun r0 = run_cli("extract " + testing::bunny_model().string() + " --percent 100 -q -o " +
+                            (dir / "bunny.vtp").string());
+  ASSERT_EQ(exit_code(r0), 0) << r0.output;
+  const CliRun r = run_cli("reconstruct " + (dir / "bunny.vtp").string() + " -r 64 -q -o " +
+                           (dir / "again.ply").string());
+  EXPECT_EQ(exit_code(r), 0) << r.output;
+  EXPECT_GT(read_mesh((dir / "again.ply").string()).triangles.size(), 1000u);
+}
+
 }  // namespace
 }  // namespace scan2lod
