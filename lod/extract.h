@@ -1,4 +1,4 @@
-// Run-time LOD mesh generation (seed 003 §6.1-6.2): the first N entries of the
+// Run-time LOD mesh generation (Lee 2007, §6.1-6.2): the first N entries of the
 // LOD array are expanded, and the cut below them is emitted by reference into
 // the octree's precomputed vertices and triangles. No floating-point work.
 #pragma once

@@ -177,7 +177,7 @@ LodArray number_nodes(const McOctree& tree) {
   // A node may expand once everything beside it on its level is covered by
   // nodes of its level or finer: for each of the 26 cells around it, the
   // deepest node above that cell (its parent if the cell has a node, else the
-  // ancestor whose subtree has no surface there) must have expanded. The seed's
+  // ancestor whose subtree has no surface there) must have expanded. Lee's
   // "marked or none" reads the same, with null nodes as real children.
   // The nodes above `node`'s 26 neighbour cells that must expand before it,
   // found through the neighbour arrays of its ancestors: the cell's cube one

@@ -1,4 +1,4 @@
-// Incremental extraction (seed 001's LODStrips idea on seed 003's octree): a
+// Incremental extraction (the idea of Ramos's LODStrips, 2008 on Lee 2007's octree): a
 // level held as an index buffer and moved to another priority by applying the
 // expansions or collapses in between, instead of rebuilding the cut.
 //

@@ -1,5 +1,5 @@
-// Crack patching between octree levels (seed 003 §5.3, done as conforming
-// transitions rather than the seed's projection, which leaves T-junctions).
+// Crack patching between octree levels (Lee 2007, §5.3, done as conforming
+// transitions rather than Lee's projection, which leaves T-junctions).
 //
 // A node beside finer nodes is triangulated on its boundary refined to theirs:
 // every node edge with a finer node around it is split at its midpoint, and

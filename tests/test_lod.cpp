@@ -1,4 +1,4 @@
-// Claims of seed 003 chapters 5-6 about the prioritized marching-cube octree.
+// Claims of Lee 2007 chapters 5-6 about the prioritized marching-cube octree.
 #include "acquisition/lattice_normals.h"
 #include "acquisition/load_inputs.h"
 #include "acquisition/virtual_scanner.h"
@@ -226,7 +226,7 @@ TEST(CrackPatching, BunnyHasNoNonManifoldEdgeAtAnyLevel) {
 }
 
 TEST(LodMetric, DeviationStaysCloserToTheFullMeshThanAreaDifference) {
-  // The seed's area difference leaves curved coarse nodes unexpanded; the
+  // Lee's area difference leaves curved coarse nodes unexpanded; the
   // deviation metric spends the same triangles where the surface bends.
   const Model& m = bunny64();
   OctreeOptions seed;

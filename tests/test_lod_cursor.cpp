@@ -1,5 +1,5 @@
-// Incremental extraction (lod/lod_cursor.h, seed 001's LODStrips idea on seed
-// 003's octree): moving between levels gives extract_lod's mesh and costs in
+// Incremental extraction (lod/lod_cursor.h, the idea of Ramos's LODStrips, 2008, on
+// Lee 2007's octree): moving between levels gives extract_lod's mesh and costs in
 // proportion to the expansions in between, not to the mesh.
 #include "lod/extract.h"
 #include "lod/lod_array.h"

@@ -1,4 +1,4 @@
-// LOD benchmark: scan2lod's prioritized marching-cube octree (seed 003 §5-6)
+// LOD benchmark: scan2lod's prioritized marching-cube octree (Lee 2007, §5-6)
 // against the mesh simplifiers a user would otherwise reach for, on the same
 // mesh and at the same triangle counts (the Stanford bunny scans by default).
 //
@@ -441,7 +441,7 @@ struct Level {
 };
 
 // The first cut of the LOD array whose nodes' own triangles (no transitions,
-// so cracks stay open: the seed's mesh before its projection) number at least
+// so cracks stay open: Lee's mesh before its projection) number at least
 // `target`, with the hole patches extract_lod would show there.
 // An octree diagnostic, so it reads the octree's arrays (model.octree) rather
 // than going through LevelExtractor.
