@@ -260,16 +260,12 @@ std::vector<int>& local_index(std::size_t vertices) {
 
 }  // namespace
 
-SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size_t target,
-                               const SimplifyInput& in) {
-  const std::vector<Vec3f>& positions = *in.positions;
-  const bool use_normals = in.normal_weight > 0 && in.normals && !in.normals->empty();
-  const bool use_colors = in.color_weight > 0 && in.colors && !in.colors->empty();
-
-  // Phase: the group in local indices.
-  thread_local GroupTopology g;
+// Phase 1: the group's triangles in local indices, with their incidence and
+// which vertices are locked or on the border. Returns local -> global.
+std::vector<std::int32_t> load_group(const std::vector<Triangle>& triangles, const SimplifyInput& in,
+                                     std::vector<int>& local, GroupTopology* group) {
+  GroupTopology& g = *group;
   g.tris.clear();
-  std::vector<int>& local = local_index(positions.size());
   std::vector<std::int32_t> global;
   for (const Triangle& t : triangles) {
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
@@ -293,8 +289,16 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
   for (std::size_t v = 0; v < nv; ++v) g.locked[v] = (*in.locked)[std::size_t(global[v])];
   classify(&g);
 
-  // Phase: quadrics.
-  thread_local GroupQuadrics q;  // reused: a group's quadrics are about a megabyte
+  return global;
+}
+
+// Phase 2: each vertex's generalized quadric (position, and normal and colour
+// when weighted), with border planes so that borders slide along themselves.
+void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& global, const SimplifyInput& in,
+                    bool use_normals, bool use_colors, GroupQuadrics* quadrics) {
+  const std::vector<Vec3f>& positions = *in.positions;
+  GroupQuadrics& q = *quadrics;
+  const std::size_t nv = global.size();
   q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
   q.x.resize(nv);
   q.full.assign(nv, Quadric());
@@ -341,7 +345,14 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
     }
   }
 
-  // Phase: collapse the cheapest edge first, until the target.
+}
+
+// Phase 3: collapses the cheapest edge first until `target` triangles are
+// left. Returns, per vertex, where it went (-1: kept).
+std::vector<int> collapse_to_target(std::size_t target, GroupTopology* group, GroupQuadrics* quadrics) {
+  GroupTopology& g = *group;
+  GroupQuadrics& q = *quadrics;
+  const std::size_t nv = q.x.size();
   auto cost = [&](int from, int to) {  // the quadrics' sum, evaluated as a sum: no copy
     const double* x = q.x[std::size_t(to)].data();
     return float(std::max(0.0, q.full[std::size_t(from)].evaluate(x, q.dim) + q.full[std::size_t(to)].evaluate(x, q.dim)));
@@ -407,6 +418,20 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
                list.end());
     push_around(c.to);
   }
+
+  return moved_to;
+}
+
+SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size_t target,
+                               const SimplifyInput& in) {
+  const bool use_normals = in.normal_weight > 0 && in.normals && !in.normals->empty();
+  const bool use_colors = in.color_weight > 0 && in.colors && !in.colors->empty();
+  thread_local GroupTopology g;
+  thread_local GroupQuadrics q;  // reused: a group's quadrics are about a megabyte
+  std::vector<int>& local = local_index(in.positions->size());
+  const std::vector<std::int32_t> global = load_group(triangles, in, local, &g);
+  group_quadrics(g, global, in, use_normals, use_colors, &q);
+  std::vector<int> moved_to = collapse_to_target(target, &g, &q);
 
   SimplifiedGroup out;
   for (std::size_t t = 0; t < g.tris.size(); ++t)
