@@ -6,6 +6,7 @@
 #include "cli/terminal.h"
 #include "core/error.h"
 #include "io/mesh_file.h"
+#include "lod/level_chain.h"
 #include "lod/lod_model.h"
 #include "lod/model_file.h"
 
@@ -115,18 +116,7 @@ void add_extract_command(CLI::App& app) {
     const LodStructure structure = structure_named(
         model, args->structure.empty() && priority->count() ? std::string("octree") : args->structure, args->model);
     LevelExtractor extractor(model, structure);
-    LevelCut cut;
-    try {
-      cut = extractor.extract(request);
-    } catch (const InputError& e) {
-      throw InputError(args->model, e.what());
-    }
-    if (cut.triangles.empty() || (triangles->count() && std::int64_t(cut.triangles.size()) > args->triangles))
-      throw InputError(args->model, cut.triangles.empty()
-                                        ? std::string("the level asked for has no triangles; ask for a finer one")
-                                        : "no level has at most " + std::to_string(args->triangles) +
-                                              " triangles; the coarsest level offered has " +
-                                              std::to_string(extractor.coarsest_triangles()));
+    const LevelCut& cut = extract_level_to_deliver(&extractor, request, args->model);
     const auto start = std::chrono::steady_clock::now();
     const TriangleMesh mesh = compact_level(model, cut.triangles);
     const double compact_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

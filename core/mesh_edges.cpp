@@ -42,11 +42,14 @@ MeshEdges mesh_edges(const std::vector<Triangle>& triangles, std::size_t vertex_
   return edges;
 }
 
-double mean_edge_length(const std::vector<Vec3f>& p, const std::vector<Triangle>& triangles) {
+double mean_edge_length(const std::vector<Vec3f>& p, const std::vector<Triangle>& triangles, std::size_t stride) {
   double sum = 0;
-  for (const Triangle& t : triangles)
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < triangles.size(); i += stride, ++n) {
+    const Triangle& t = triangles[i];
     for (int k = 0; k < 3; ++k) sum += (p[std::size_t(t[k])] - p[std::size_t(t[(k + 1) % 3])]).norm();
-  return triangles.empty() ? 0 : sum / double(3 * triangles.size());
+  }
+  return n == 0 ? 0 : sum / double(3 * n);
 }
 
 }  // namespace scan2lod

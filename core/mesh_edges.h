@@ -24,8 +24,10 @@ struct MeshEdges {
 // Edges of `triangles`, whose indices are below `vertex_count`.
 MeshEdges mesh_edges(const std::vector<Triangle>& triangles, std::size_t vertex_count);
 
-// Mean length of the triangles' sides (each shared edge counted per side);
-// 0 without triangles. A level's scale: what its detail spans on screen.
-double mean_edge_length(const std::vector<Vec3f>& positions, const std::vector<Triangle>& triangles);
+// Mean length of the triangles' sides (each shared edge counted per side),
+// over every `stride`-th triangle; 0 without triangles. A level's scale: what
+// its detail spans on screen.
+double mean_edge_length(const std::vector<Vec3f>& positions, const std::vector<Triangle>& triangles,
+                        std::size_t stride = 1);
 
 }  // namespace scan2lod

@@ -23,6 +23,24 @@ std::string describe(const LevelRequest& r) {
 
 }  // namespace
 
+const LevelCut& extract_level_to_deliver(LevelExtractor* extractor, const LevelRequest& request,
+                                         const std::string& source) {
+  const LevelCut* cut;
+  try {
+    cut = &extractor->extract(request);
+  } catch (const InputError& e) {
+    throw InputError(source, e.what());
+  }
+  const bool over =
+      request.kind == LevelRequest::Kind::kTriangles && std::int64_t(cut->triangles.size()) > request.triangles;
+  if (cut->triangles.empty() || over)
+    throw InputError(source, over ? "no level has at most " + std::to_string(request.triangles) +
+                                        " triangles; the coarsest level offered has " +
+                                        std::to_string(extractor->coarsest_triangles())
+                                  : describe(request) + " has no triangles; ask for a finer one");
+  return *cut;
+}
+
 LevelChain extract_chain(const LodModel& model, LodStructure structure, const std::vector<LevelRequest>& requests,
                          const std::string& source, const ChainOptions& options) {
   LevelExtractor extractor(model, structure);
@@ -30,18 +48,7 @@ LevelChain extract_chain(const LodModel& model, LodStructure structure, const st
   chain.structure = structure;
   for (const LevelRequest& request : requests) {
     ChainLevel level;
-    try {
-      level.cut = extractor.extract(request);
-    } catch (const InputError& e) {
-      throw InputError(source, e.what());
-    }
-    const bool over = request.kind == LevelRequest::Kind::kTriangles &&
-                      std::int64_t(level.cut.triangles.size()) > request.triangles;
-    if (level.cut.triangles.empty() || over)
-      throw InputError(source, over ? "no level has at most " + std::to_string(request.triangles) +
-                                          " triangles; the coarsest level offered has " +
-                                          std::to_string(extractor.coarsest_triangles())
-                                    : describe(request) + " has no triangles; ask for a finer one");
+    level.cut = extract_level_to_deliver(&extractor, request, source);
     level.error = structure == LodStructure::kClusters ? level.cut.error
                                                         : 0.25 * mean_edge_length(model.vertices.positions,
                                                                                   level.cut.triangles);

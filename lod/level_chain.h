@@ -38,6 +38,13 @@ struct LevelChain {
   std::vector<ChainLevel> levels;  // finest first
 };
 
+// The level `request` asks of `extractor`, for writing out: throws
+// InputError (naming `source`) for a request the structure does not offer, a
+// level with no triangles, or a --triangles budget below the coarsest level
+// (which the extractor answers with that coarsest level).
+const LevelCut& extract_level_to_deliver(LevelExtractor* extractor, const LevelRequest& request,
+                                         const std::string& source);
+
 // Takes `requests` from `structure` of `model`, orders them finest first and
 // compacts the vertices they use. Throws InputError (naming `source`) for a
 // request the structure does not offer or one that gives no triangles.

@@ -545,11 +545,11 @@ void Viewer::Impl::show_cut(const LevelCut& cut) {
   level_vertices = used;
   // How long edges are on screen (a sample of them is enough): dense
   // wireframes are drawn lit and grey instead of black (style_wireframe).
-  std::vector<Triangle> sample;
   const std::size_t stride = std::max<std::size_t>(1, triangles.size() / 4096);
-  for (std::size_t i = 0; i < triangles.size(); i += stride) sample.push_back(triangles[i]);
   const double diagonal = box.diagonal();
-  edge_pixels = diagonal > 0 ? mean_edge_length(input.model->vertices.positions, sample) / diagonal * options.height : 8;
+  edge_pixels = diagonal > 0 ? mean_edge_length(input.model->vertices.positions, triangles, stride) / diagonal *
+                                   options.height
+                             : 8;
   if (state.mode == DrawMode::wireframe) apply_mode();
   state.convert_ms = ms_since(start);
   state.extract_ms = cut.extract_seconds * 1e3;
