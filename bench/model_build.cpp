@@ -2,6 +2,7 @@
 
 #include "bench/bench_support.h"
 #include "lod/lod_array.h"
+#include "lod/octree_order.h"
 #include "lod/mc_octree.h"
 
 #include <utility>

@@ -8,6 +8,7 @@
 #include "cli/terminal.h"
 #include "io/mesh_file.h"
 #include "lod/lod_array.h"
+#include "lod/octree_order.h"
 #include "lod/mc_octree.h"
 #include "lod/model_file.h"
 

@@ -45,7 +45,8 @@ void add_info_command(CLI::App& app) {
                             {"vertices", l.vertices}});
         j["octree"] = {{"resolution", o.resolution},   {"depth", o.depth},   {"nodes", o.nodes},
                        {"nodes_per_level", o.nodes_per_level}, {"leaves", o.leaves}, {"expansions", o.expansions},
-                       {"pinned", o.pinned},           {"levels_of_detail", levels}};
+                       {"pinned", o.pinned},           {"offered_levels", o.offered_levels},
+                       {"coarsest_offered_triangles", o.coarsest_triangles}, {"levels_of_detail", levels}};
         // Kept at the top level too, as before the cluster hierarchy.
         for (const char* key : {"resolution", "depth", "nodes", "nodes_per_level", "leaves", "expansions", "pinned",
                                 "levels_of_detail"})
@@ -59,6 +60,8 @@ void add_info_command(CLI::App& app) {
           say("\nthe first %zu expansions (%lld triangles) keep the rim at full detail: no level is offered "
                       "inside them",
                       o.pinned, static_cast<long long>(o.pinned_triangles));
+        say("\n%zu levels offered, from %lld triangles to %lld", o.offered_levels,
+            static_cast<long long>(o.coarsest_triangles), static_cast<long long>(o.full_triangles));
         say("\n\n%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
         for (const LevelSummary& l : lods)
           say("%6g %10zu %10zu %10zu\n", l.percent, l.priority, l.triangles, l.vertices);

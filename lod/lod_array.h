@@ -4,12 +4,7 @@
 // level (the 26 around it) exists in the current cut or has no surface. So
 // neighbouring nodes in any prefix differ by at most one level.
 //
-// Two additions to the seed. The nodes above the full mesh's rim, above the rims
-// of hole patches and above crossings the leaves lack (with what the neighbour
-// rule makes them wait for) expand first, whatever their metric, so that no
-// level opens a boundary the full mesh lacks: on the bunny at R = 256 that is
-// 2,129 of 71,343 expansions (18,867 triangles), the `pinned` prefix. Then nodes whose children
-// have no more triangles than they do expand as soon as they may.
+// The array itself is built by number_nodes (lod/octree_order.h).
 #pragma once
 
 #include "lod/mc_octree.h"
@@ -24,19 +19,24 @@ struct LodArray {
   // accumulated[i]: triangles of the mesh after the first i expansions
   // (accumulated[0]: the root's own), order.size() + 1 entries.
   std::vector<std::int64_t> accumulated;
-  // The first `pinned` expansions are the pinned nodes (see above): no level
-  // is offered inside them, where part of the rim would still be coarse.
+  // No level is offered inside the first `pinned` expansions (what the
+  // coarsening could not undo soundly, lod/coarsening.h) ...
   std::size_t pinned = 0;
+  // ... nor at these priority numbers (ascending), inside a step of several
+  // expansions that the coarsening took together.
+  std::vector<std::int32_t> inside_steps;
 
   std::size_t full() const { return order.size(); }
 };
 
-// Numbers the nodes of `tree` with a priority queue: O(n log n) for n nodes.
-LodArray number_nodes(const McOctree& tree);
+// The accumulation table of lod.order (LodArray::accumulated), counted by
+// following the extracted meshes exactly: O(expansions) node emissions.
+std::vector<std::int64_t> accumulation_table(const McOctree& tree, const LodArray& lod);
 
-// The priority numbers at which levels are offered: 0, then from the end of the
-// pinned prefix on, those whose triangle count is at least every earlier one's,
-// up to full detail. A single expansion
+// The priority numbers at which levels are offered: past the pinned prefix
+// (older models) and outside the coarsening's steps (`inside_steps`), those
+// whose triangle count is at least every earlier one's, up to full detail. A
+// single expansion
 // can lower the count (a node's children may need fewer triangles than it, and
 // its coarser neighbours' transitions change), so offered levels skip those
 // dips and the count never decreases from one offered level to the next.
@@ -48,10 +48,10 @@ std::vector<std::size_t> monotone_priorities(const LodArray& lod);
 std::size_t priority_for_percent(const LodArray& lod, double percent);
 
 // The largest offered priority number whose mesh has at most `triangles`
-// triangles, through the accumulation table (at least 0). A budget below the
-// smallest offered level gets the largest level inside the pinned prefix that
-// fits: smaller than any offered one, at the price of boundary loops near the
-// rim that the full mesh lacks.
+// triangles, through the accumulation table. A budget below the smallest
+// offered level gets that level (more triangles than asked: callers say so)
+// or, in older models with a pinned prefix, the largest level inside it that
+// fits, at the price of boundary loops near the rim that the full mesh lacks.
 std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles);
 
 }  // namespace scan2lod

@@ -234,6 +234,9 @@ OctreeSummary describe_octree(const LodModel& model) {
   s.pinned = lod.pinned;
   s.pinned_triangles = lod.accumulated[lod.pinned];
   s.full_triangles = lod.accumulated.back();
+  const std::vector<std::size_t> offered = monotone_priorities(lod);
+  s.offered_levels = offered.size();
+  s.coarsest_triangles = lod.accumulated[offered.front()];
   return s;
 }
 

@@ -147,6 +147,8 @@ struct OctreeSummary {
   Vec3d origin = Vec3d::Zero();
   std::size_t nodes = 0, leaves = 0, expansions = 0, pinned = 0;
   std::int64_t pinned_triangles = 0, full_triangles = 0;
+  std::size_t offered_levels = 0;        // monotone_priorities' count
+  std::int64_t coarsest_triangles = 0;   // of the coarsest offered level
   std::vector<std::size_t> nodes_per_level;
 };
 struct ClusterSummary {

@@ -176,6 +176,8 @@ const SectionSpec kSections[] = {
     {"LODA", Part::kOctree, true, [](LodModel& m, Records&) { return array(m.octree->lod.accumulated); }},
     // 1.1, optional: older readers offer levels inside it.
     {"PINC", Part::kOctree, false, [](LodModel&, Records& r) { return record(&r.pinned, 8); }},
+    // 4.1, optional: older readers offer levels inside the coarsening's steps.
+    {"STEP", Part::kOctree, false, [](LodModel& m, Records&) { return array(m.octree->lod.inside_steps); }},
     {"CINF", Part::kClusters, true, [](LodModel&, Records& r) { return record(r.cluster_info, 24); }, 3},
     {"CLUS", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->clusters); }, 3},
     {"CTRI", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->triangles); }, 3},
@@ -506,7 +508,7 @@ void Decoder::read_part(Part part, LodModel* model) {
   for (const SectionSpec& spec : kSections) {
     if (spec.part != part || !spec.in(major_)) continue;
     const Payload p = spec.payload(*model, records_);
-    if (!p.resize) continue;
+    if (!p.resize || (!spec.required && !by_tag_.count(fourcc(spec.tag)))) continue;
     const Section& s = section(spec.tag);
     if (s.element_size != p.element_size)
       fail("section '" + std::string(spec.tag) + "' has elements of " + bytes_text(s.element_size) + ", expected " +
@@ -785,6 +787,11 @@ void Decoder::check_lod_array(const McOctree& t, const LodArray& lod, std::size_
     if (lod.accumulated[k] < 0) bad("accumulation table entry " + std::to_string(k) + " is negative");
   if (lod.pinned > lod.order.size())
     bad(std::to_string(lod.pinned) + " pinned expansions of " + std::to_string(lod.order.size()));
+  for (std::size_t k = 0; k < lod.inside_steps.size(); ++k)
+    if (lod.inside_steps[k] < 0 || std::size_t(lod.inside_steps[k]) >= lod.order.size() ||
+        (k > 0 && lod.inside_steps[k] <= lod.inside_steps[k - 1]))
+      bad("entry " + std::to_string(k) + " of the priorities not offered ('STEP') is " +
+          std::to_string(lod.inside_steps[k]) + ": expected ascending numbers below " + std::to_string(lod.order.size()));
 }
 
 LodModel Decoder::decode() {

@@ -70,6 +70,10 @@
 //   SUBM u64 per internal node, SUBP i32  the same for the 48 sub-edges
 // Neighbours are found again from the tree. On the bunny at R = 256 the file
 // went from 58.3 to 18.4 MB (the octree's part from 51.4 to 11.4 MB).
+// Added in 4.1, optional (a 4.0 reader skips it and offers levels inside the
+// coarsening's steps, lod/coarsening.h, which may be unsound; a 4.1 reader of
+// an older file offers every level past the pinned prefix):
+//   STEP i32, ascending        LodArray::inside_steps, priority numbers not offered
 // Every section is listed once, in kSections (model_file.cpp), with the
 // formats that hold it: the writer and the reader both walk that table. A new
 // array is a new row there (and, if it must agree with others, a check in the
@@ -88,7 +92,7 @@
 namespace scan2lod {
 
 constexpr std::uint32_t kModelFormatMajor = 4;
-constexpr std::uint32_t kModelFormatMinor = 0;
+constexpr std::uint32_t kModelFormatMinor = 1;
 
 // Writes `model` to `path` (extension .mco) through a temporary file renamed
 // into place (write_atomically): a failure leaves nothing under `path`.

@@ -3,6 +3,7 @@
 // proportion to the expansions in between, not to the mesh.
 #include "lod/extract.h"
 #include "lod/lod_array.h"
+#include "lod/octree_order.h"
 #include "lod/lod_cursor.h"
 #include "lod/lod_model.h"
 #include "lod/mc_octree.h"

@@ -4,6 +4,7 @@
 #include "acquisition/virtual_scanner.h"
 #include "lod/extract.h"
 #include "lod/lod_array.h"
+#include "lod/octree_order.h"
 #include "lod/mc_octree.h"
 #include "measure/topology.h"
 #include "reconstruct/marching_cubes.h"

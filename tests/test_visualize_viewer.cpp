@@ -126,8 +126,10 @@ TEST(VisualizeViewer, SliderMovesShowTheLevelTheExtractionApiGives) {
   type_key(viewer, 'o');
   ASSERT_TRUE(viewer.state().cells);
   EXPECT_EQ(viewer.state().cell_count, scan2lod::lod_cut(model, viewer.state().priority).size());
-  drag_slider(viewer, 0);
-  EXPECT_EQ(viewer.state().cell_count, 1u);  // the root alone
+  drag_slider(viewer, 0);  // the coarsest offered level: its few cells
+  EXPECT_EQ(viewer.state().priority, scan2lod::monotone_priorities(model.octree->lod).front());
+  EXPECT_EQ(viewer.state().cell_count, scan2lod::lod_cut(model, viewer.state().priority).size());
+  EXPECT_LE(viewer.state().cell_count, 64u);
   drag_slider(viewer, 100);
   type_key(viewer, 'v');
   ASSERT_TRUE(viewer.state().split);

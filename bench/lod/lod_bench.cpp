@@ -70,6 +70,7 @@
 #include "core/types.h"
 #include "lod/extract.h"
 #include "lod/lod_array.h"
+#include "lod/octree_order.h"
 #include "lod/lod_model.h"
 #include "lod/mc_octree.h"
 #include "lod/model_file.h"

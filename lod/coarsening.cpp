@@ -1,0 +1,400 @@
+#include "lod/coarsening.h"
+
+#include "lod/extract.h"
+#include "lod/level_topology.h"
+#include "reconstruct/cube_grid.h"
+
+#include <algorithm>
+#include <queue>
+
+namespace scan2lod {
+namespace {
+
+constexpr std::uint8_t kExpanded = 1;
+
+class Coarsening {
+ public:
+  Coarsening(const McOctree& tree, const std::vector<std::int32_t>& rank);
+  CoarseningOrder run();
+
+ private:
+  enum class Outcome { kCollapsed, kRefused, kWaiting };
+  void start();
+  Outcome try_collapse(std::int32_t node, bool closed);
+  void gather_step(std::int32_t node, bool closed);
+  bool neighbours_allow(std::int32_t node);
+  void gather_change();
+  void emit_change(bool expanded);
+  void settle(std::int32_t node);  // collapsed or refused: its parent may be ready
+  void wake(std::int32_t node);    // left the expanded set
+  bool release_waiting();
+  bool may_expand(std::int32_t node) const;
+  bool try_expand(std::int32_t node, bool forced);
+  void order_step(std::vector<std::int32_t> nodes, CoarseningOrder* out);
+  CoarseningOrder replay();
+
+  const McOctree& tree_;
+  const std::vector<std::int32_t>& rank_;
+  LevelTopology topology_;
+
+  std::vector<std::uint8_t> flags_;        // bit 0 expanded (extract.h's)
+  std::vector<std::uint8_t> refused_;      // expanded for good, unless the parent takes it along
+  std::vector<std::int32_t> pending_;      // children expanded and not refused
+  std::vector<std::int32_t> missing_;      // per patch group: needs not expanded
+  std::vector<std::int32_t> groups_first_, groups_;  // per node, the patch groups that need it
+  std::priority_queue<std::pair<std::int32_t, std::int32_t>> queue_;  // (rank, node)
+
+  // Nodes waiting for a finer neighbour to collapse: (node, next) lists per awaited node.
+  std::vector<std::int32_t> first_waiter_;
+  std::vector<std::pair<std::int32_t, std::int32_t>> waiters_;
+  std::vector<std::int32_t> waiting_;
+
+  // The step being tried: its nodes, the cut nodes whose triangles it changes,
+  // the patch groups it hides, and the triangles before and after.
+  std::vector<std::int32_t> step_, changed_, hidden_;
+  std::vector<std::uint8_t> mark_, in_step_;
+  std::vector<Triangle> expanded_, collapsed_;
+
+  std::vector<std::int32_t> step_nodes_, step_first_{0};  // accepted steps, in order
+  std::int64_t triangles_ = 0;  // in the current level
+};
+
+Coarsening::Coarsening(const McOctree& tree, const std::vector<std::int32_t>& rank)
+    : tree_(tree), rank_(rank), topology_(tree.vertices.size(), tree.triangles.size()) {}
+
+// The full mesh: every node above the leaves expanded, every patch shown.
+void Coarsening::start() {
+  const std::size_t n = tree_.size();
+  flags_.assign(n, 0);
+  refused_.assign(n, 0);
+  pending_.assign(n, 0);
+  mark_.assign(n, 0);
+  in_step_.assign(n, 0);
+  first_waiter_.assign(n, -1);
+  for (std::size_t node = 0; node < n; ++node) {
+    if (tree_.is_leaf(node)) continue;
+    flags_[node] = kExpanded;
+    if (tree_.nodes.parents[node] >= 0) ++pending_[std::size_t(tree_.nodes.parents[node])];
+  }
+  missing_.assign(tree_.patch_groups(), 0);
+  groups_first_.assign(n + 1, 0);
+  for (const std::int32_t node : tree_.patches.needs) ++groups_first_[std::size_t(node) + 1];
+  for (std::size_t i = 0; i < n; ++i) groups_first_[i + 1] += groups_first_[i];
+  groups_.resize(tree_.patches.needs.size());
+  std::vector<std::int32_t> fill(groups_first_.begin(), groups_first_.end() - 1);
+  for (std::size_t g = 0; g < tree_.patch_groups(); ++g)
+    for (std::int32_t k = tree_.patches.needs_first[g]; k < tree_.patches.needs_first[g + 1]; ++k)
+      groups_[std::size_t(fill[std::size_t(tree_.patches.needs[std::size_t(k)])]++)] = std::int32_t(g);
+
+  std::vector<Triangle> full;
+  for (std::size_t node = 0; node < n; ++node)
+    if (tree_.is_leaf(node)) emit_node(tree_, std::int32_t(node), flags_, &full);
+  full.insert(full.end(), tree_.patches.triangles.begin(), tree_.patches.triangles.end());
+  topology_.add(full);
+  triangles_ = std::int64_t(full.size());
+  for (std::size_t node = 0; node < n; ++node)
+    if (flags_[node] && pending_[node] == 0) queue_.push({rank_[node], std::int32_t(node)});
+}
+
+// The step that collapses `node`: it and the expanded nodes under it (all
+// refused), parents first. `closed`: also what the neighbour rule then
+// requires to collapse with them: expanded children of the nodes beside a
+// collapsing node, with what is under them, until nothing more is needed.
+void Coarsening::gather_step(std::int32_t node, bool closed) {
+  step_.assign(1, node);
+  in_step_[std::size_t(node)] = 1;
+  auto take = [&](std::int32_t q) {
+    if (in_step_[std::size_t(q)] || !(flags_[std::size_t(q)] & kExpanded)) return;
+    in_step_[std::size_t(q)] = 1;
+    step_.push_back(q);
+  };
+  for (std::size_t i = 0; i < step_.size(); ++i) {
+    const std::int32_t s = step_[i];
+    for (int c = 0; c < tree_.nodes.child_counts[s]; ++c) take(tree_.nodes.first_child[s] + c);
+    if (!closed) continue;
+    for (int c = 0; c < 27; ++c) {
+      const std::int32_t q = tree_.transitions.neighbours[std::size_t(s)][std::size_t(c)];
+      if (c == 13 || q < 0 || in_step_[std::size_t(q)] || !(flags_[std::size_t(q)] & kExpanded)) continue;
+      for (int k = 0; k < tree_.nodes.child_counts[q]; ++k) take(tree_.nodes.first_child[q] + k);
+    }
+  }
+  std::sort(step_.begin(), step_.end());
+}
+
+// Collapsed, `node` is a cut node on its level: the nodes of its level beside
+// it must not have expanded children (they would be two levels finer).
+bool Coarsening::neighbours_allow(std::int32_t node) {
+  const auto& around = tree_.transitions.neighbours[std::size_t(node)];
+  for (int c = 0; c < 27; ++c) {
+    const std::int32_t q = around[std::size_t(c)];
+    if (c == 13 || q < 0 || !(flags_[std::size_t(q)] & kExpanded)) continue;
+    for (int k = 0; k < tree_.nodes.child_counts[q]; ++k) {
+      const std::int32_t child = tree_.nodes.first_child[q] + k;
+      if (!(flags_[std::size_t(child)] & kExpanded)) continue;
+      // Waits for this one; the others are seen when it has gone.
+      waiters_.push_back({node, first_waiter_[std::size_t(child)]});
+      first_waiter_[std::size_t(child)] = std::int32_t(waiters_.size() - 1);
+      return false;
+    }
+  }
+  return true;
+}
+
+// The cut nodes the step re-emits: those under it, and those beside its nodes
+// across a face or an edge (their transitions read its nodes' flags); and the
+// patch groups it hides.
+void Coarsening::gather_change() {
+  changed_.clear();
+  hidden_.clear();
+  auto add = [&](std::int32_t q) {
+    if (mark_[std::size_t(q)] & 2) return;
+    mark_[std::size_t(q)] |= 2;
+    changed_.push_back(q);
+  };
+  for (const std::int32_t s : step_) {
+    for (int c = 0; c < tree_.nodes.child_counts[s]; ++c) {
+      const std::int32_t child = tree_.nodes.first_child[s] + c;
+      if (!(flags_[std::size_t(child)] & kExpanded)) add(child);
+    }
+    if (std::size_t(s) < tree_.internal_nodes())
+      for (const int c : splitting_cells()) {
+        const std::int32_t q = tree_.transitions.neighbours[std::size_t(s)][std::size_t(c)];
+        if (q < 0 || (flags_[std::size_t(q)] & kExpanded)) continue;
+        const std::int32_t up = tree_.nodes.parents[std::size_t(q)];
+        if (up >= 0 && (flags_[std::size_t(up)] & kExpanded) && !in_step_[std::size_t(up)]) add(q);
+      }
+    for (std::int32_t k = groups_first_[std::size_t(s)]; k < groups_first_[std::size_t(s) + 1]; ++k) {
+      const std::int32_t g = groups_[std::size_t(k)];
+      if (missing_[std::size_t(g)] == 0 && std::find(hidden_.begin(), hidden_.end(), g) == hidden_.end())
+        hidden_.push_back(g);
+    }
+  }
+  for (const std::int32_t q : changed_) mark_[std::size_t(q)] = 0;
+}
+
+// The changed triangles with the step's nodes expanded or collapsed (the
+// flags as they are now).
+void Coarsening::emit_change(bool expanded) {
+  std::vector<Triangle>& out = expanded ? expanded_ : collapsed_;
+  out.clear();
+  for (const std::int32_t q : changed_) {
+    const std::int32_t up = tree_.nodes.parents[std::size_t(q)];
+    // Under the step, only its top node stays in the cut.
+    const bool under = up >= 0 && in_step_[std::size_t(up)];
+    if (expanded || !under) emit_node(tree_, q, flags_, &out);
+  }
+  if (expanded) {
+    for (const std::int32_t g : hidden_)
+      out.insert(out.end(), tree_.patches.triangles.begin() + tree_.patches.group_first[std::size_t(g)],
+                 tree_.patches.triangles.begin() + tree_.patches.group_first[std::size_t(g) + 1]);
+  } else {
+    for (const std::int32_t s : step_) {
+      const std::int32_t up = tree_.nodes.parents[std::size_t(s)];
+      if (up < 0 || !in_step_[std::size_t(up)]) emit_node(tree_, s, flags_, &out);
+    }
+  }
+}
+
+Coarsening::Outcome Coarsening::try_collapse(std::int32_t node, bool closed) {
+  if (!closed && !neighbours_allow(node)) return Outcome::kWaiting;
+  gather_step(node, closed);
+  gather_change();
+  emit_change(true);
+  for (const std::int32_t s : step_) flags_[std::size_t(s)] = 0;
+  emit_change(false);
+  const bool kept = topology_.keeps_topology(expanded_, collapsed_);
+  if (kept) triangles_ += std::int64_t(collapsed_.size()) - std::int64_t(expanded_.size());
+  if (!kept) {
+    for (const std::int32_t s : step_) flags_[std::size_t(s)] = kExpanded;
+  } else {
+    topology_.commit();
+    for (const std::int32_t s : step_)
+      for (std::int32_t k = groups_first_[std::size_t(s)]; k < groups_first_[std::size_t(s) + 1]; ++k)
+        ++missing_[std::size_t(groups_[std::size_t(k)])];
+    step_nodes_.insert(step_nodes_.end(), step_.begin(), step_.end());
+    step_first_.push_back(std::int32_t(step_nodes_.size()));
+    // The step's other tops (taken for the neighbour rule) leave their parents' wait.
+    for (const std::int32_t s : step_) {
+      const std::int32_t up = tree_.nodes.parents[std::size_t(s)];
+      if (s != node && up >= 0 && !in_step_[std::size_t(up)] && !refused_[std::size_t(s)]) settle(s);
+      wake(s);
+    }
+  }
+  for (const std::int32_t s : step_) in_step_[std::size_t(s)] = 0;
+  return kept ? Outcome::kCollapsed : Outcome::kRefused;
+}
+
+void Coarsening::settle(std::int32_t node) {
+  const std::int32_t up = tree_.nodes.parents[std::size_t(node)];
+  if (up >= 0 && --pending_[std::size_t(up)] == 0) queue_.push({rank_[std::size_t(up)], up});
+}
+
+void Coarsening::wake(std::int32_t node) {
+  for (std::int32_t w = first_waiter_[std::size_t(node)]; w >= 0; w = waiters_[std::size_t(w)].second)
+    queue_.push({rank_[std::size_t(waiters_[std::size_t(w)].first)], waiters_[std::size_t(w)].first});
+  first_waiter_[std::size_t(node)] = -1;
+}
+
+// With nothing left to try, a node still waiting for a neighbour tries to
+// collapse together with what the neighbour rule then requires: the smallest
+// such step first, so that the coarse end keeps fine steps. After one step
+// the queue may move again. A node refused that way is left to its parent.
+// False when nothing changed.
+bool Coarsening::release_waiting() {
+  std::vector<std::pair<std::size_t, std::int32_t>> candidates;  // (step size, node)
+  for (const std::int32_t node : waiting_)
+    if ((flags_[std::size_t(node)] & kExpanded) && !refused_[std::size_t(node)] && pending_[std::size_t(node)] == 0 &&
+        !in_step_[std::size_t(node)]) {
+      gather_step(node, true);
+      candidates.push_back({step_.size(), node});
+      for (const std::int32_t s : step_) in_step_[std::size_t(s)] = 0;
+      in_step_[std::size_t(node)] = 1;  // listed once
+    }
+  for (const auto& c : candidates) in_step_[std::size_t(c.second)] = 0;
+  waiting_.clear();
+  std::sort(candidates.begin(), candidates.end(), [&](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first < b.first : rank_[std::size_t(a.second)] > rank_[std::size_t(b.second)];
+  });
+  bool changed = false;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const std::int32_t node = candidates[i].second;
+    if (!(flags_[std::size_t(node)] & kExpanded) || refused_[std::size_t(node)] || pending_[std::size_t(node)] != 0) continue;
+    changed = true;
+    if (try_collapse(node, true) == Outcome::kCollapsed) {
+      settle(node);
+      for (std::size_t j = i + 1; j < candidates.size(); ++j) waiting_.push_back(candidates[j].second);
+      break;
+    }
+    refused_[std::size_t(node)] = 1;
+    settle(node);
+  }
+  return changed;
+}
+
+CoarseningOrder Coarsening::run() {
+  start();
+  for (;;) {
+    while (!queue_.empty()) {
+      const std::int32_t node = queue_.top().second;
+      queue_.pop();
+      if (!(flags_[std::size_t(node)] & kExpanded) || refused_[std::size_t(node)] || pending_[std::size_t(node)] != 0) continue;
+      switch (try_collapse(node, false)) {
+        case Outcome::kCollapsed: settle(node); break;
+        case Outcome::kRefused: refused_[std::size_t(node)] = 1, settle(node); break;
+        case Outcome::kWaiting: waiting_.push_back(node); break;
+      }
+    }
+    if (!release_waiting()) break;
+  }
+  return replay();
+}
+
+// Whether `node` may expand now: its parent has, and so has the node above
+// each of its 26 neighbour cells one level up (Lee's neighbour rule).
+bool Coarsening::may_expand(std::int32_t node) const {
+  const std::int32_t up = tree_.nodes.parents[std::size_t(node)];
+  if (up < 0) return true;
+  if (!(flags_[std::size_t(up)] & kExpanded)) return false;
+  int x, y, z;
+  unpack_key(tree_.nodes.keys[std::size_t(node)], &x, &y, &z);
+  const auto& around = tree_.transitions.neighbours[std::size_t(up)];
+  for (int c = 0; c < 27; ++c) {
+    const int cell = (((x + c % 3 - 1) >> 1) - (x >> 1) + 1) + 3 * (((y + c / 3 % 3 - 1) >> 1) - (y >> 1) + 1) +
+                     9 * (((z + c / 9 - 1) >> 1) - (z >> 1) + 1);
+    const std::int32_t q = around[std::size_t(cell)];
+    if (q >= 0 && !tree_.is_leaf(std::size_t(q)) && !(flags_[std::size_t(q)] & kExpanded)) return false;
+  }
+  return true;
+}
+
+// Expands `node` if that keeps the level sound, or anyway when `forced`.
+bool Coarsening::try_expand(std::int32_t node, bool forced) {
+  flags_[std::size_t(node)] = kExpanded;
+  for (std::int32_t k = groups_first_[std::size_t(node)]; k < groups_first_[std::size_t(node) + 1]; ++k)
+    --missing_[std::size_t(groups_[std::size_t(k)])];
+  step_.assign(1, node);
+  in_step_[std::size_t(node)] = 1;
+  gather_change();
+  emit_change(true);
+  flags_[std::size_t(node)] = 0;
+  emit_change(false);
+  const bool kept = forced || topology_.keeps_topology(collapsed_, expanded_);
+  if (kept) {
+    flags_[std::size_t(node)] = kExpanded;
+    if (forced)
+      topology_.replace(collapsed_, expanded_);
+    else
+      topology_.commit();
+    triangles_ += std::int64_t(expanded_.size()) - std::int64_t(collapsed_.size());
+  } else {
+    for (std::int32_t k = groups_first_[std::size_t(node)]; k < groups_first_[std::size_t(node) + 1]; ++k)
+      ++missing_[std::size_t(groups_[std::size_t(k)])];
+  }
+  in_step_[std::size_t(node)] = 0;
+  return kept;
+}
+
+// The nodes of one step in an order whose prefixes stay sound as long as
+// they can: each time, the first of the nodes that may expand (by rank) whose
+// expansion keeps the level sound, else the first of them, after which the
+// rest of the step's prefixes are not offered.
+void Coarsening::order_step(std::vector<std::int32_t> nodes, CoarseningOrder* out) {
+  std::sort(nodes.begin(), nodes.end(),
+            [&](std::int32_t a, std::int32_t b) { return rank_[std::size_t(a)] < rank_[std::size_t(b)]; });
+  bool sound = true;
+  while (!nodes.empty()) {
+    std::size_t chosen = nodes.size();
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      if (!may_expand(nodes[i])) continue;
+      if (chosen == nodes.size()) chosen = i;
+      if (sound && try_expand(nodes[i], false)) {
+        chosen = i;
+        break;
+      }
+      if (!sound) break;
+    }
+    if (chosen == nodes.size()) chosen = 0;  // cannot happen: a balanced step's parents come first
+    if (!(flags_[std::size_t(nodes[chosen])] & kExpanded)) {
+      try_expand(nodes[chosen], true);
+      sound = false;
+    }
+    out->order.push_back(nodes[chosen]);
+    nodes.erase(nodes.begin() + std::ptrdiff_t(chosen));
+    if (!sound && !nodes.empty()) out->inside_steps.push_back(std::int32_t(out->order.size()));
+  }
+}
+
+// The steps reversed: first what stayed expanded (the coarsest level's
+// nodes), then each step's nodes, replayed from the coarsest level on so
+// that, while levels are small, a step's nodes come in an order that keeps as
+// many of its prefixes sound as it can.
+CoarseningOrder Coarsening::replay() {
+  constexpr std::int64_t kReorderedUpTo = 25000;  // triangles
+  CoarseningOrder out;
+  for (std::size_t node = 0; node < tree_.size(); ++node)
+    if (flags_[node] & kExpanded) out.order.push_back(std::int32_t(node));
+  out.coarsest = out.order.size();
+  for (std::int32_t p = 0; p < std::int32_t(out.coarsest); ++p) out.inside_steps.push_back(p);
+  for (std::size_t s = step_first_.size() - 1; s-- > 0;) {
+    const std::int32_t first = std::int32_t(out.order.size());
+    std::vector<std::int32_t> nodes(step_nodes_.begin() + step_first_[s], step_nodes_.begin() + step_first_[s + 1]);
+    if (triangles_ > kReorderedUpTo) {
+      out.order.insert(out.order.end(), nodes.begin(), nodes.end());
+      for (std::int32_t p = first + 1; p < std::int32_t(out.order.size()); ++p) out.inside_steps.push_back(p);
+    } else if (nodes.size() == 1) {
+      try_expand(nodes.front(), true);
+      out.order.push_back(nodes.front());
+    } else {
+      order_step(std::move(nodes), &out);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+CoarseningOrder coarsen(const McOctree& tree, const std::vector<std::int32_t>& rank) {
+  return Coarsening(tree, rank).run();
+}
+
+}  // namespace scan2lod
