@@ -133,10 +133,17 @@ void offer_sound_levels_inside_steps(const McOctree& tree, LodArray* lod) {
                             tree.triangles.begin() + tree.nodes.first_triangle[node] + tree.nodes.triangle_counts[node]);
   mesh.triangles.insert(mesh.triangles.end(), tree.patches.triangles.begin(), tree.patches.triangles.end());
   const MeshTopology full = mesh_topology(mesh);
+  // A step's run of priorities not offered is worth counting when the
+  // offered levels on either side of it are more than 2 % apart.
   std::vector<std::int32_t> counted, kept;
-  for (const std::int32_t p : lod->inside_steps) {
-    const std::int64_t count = lod->accumulated[std::size_t(p)];
-    (count > 0 && count <= kCountedUpTo ? counted : kept).push_back(p);
+  const std::vector<std::int32_t>& inside = lod->inside_steps;
+  for (std::size_t first = 0, last; first < inside.size(); first = last + 1) {
+    for (last = first; last + 1 < inside.size() && inside[last + 1] == inside[last] + 1;) ++last;
+    const std::int64_t before = lod->accumulated[std::size_t(inside[first] - (inside[first] > 0))],
+                       after = lod->accumulated[std::size_t(inside[last]) + 1];
+    const bool worth = after <= kCountedUpTo && 50 * (after - before) > before;
+    for (std::size_t i = first; i <= last; ++i)
+      (worth && lod->accumulated[std::size_t(inside[i])] > 0 ? counted : kept).push_back(inside[i]);
   }
   // Two halves at once, each with its own cursor.
   std::vector<std::uint8_t> sound(counted.size(), 0);

@@ -25,19 +25,10 @@ using O3 = open3d::geometry::TriangleMesh;
 
 namespace {
 
-struct ShapeModel {
-  McOctree tree;
-  LodArray lod;
-};
+using ShapeModel = scan2lod::testing::OctreeModel;
 
 ShapeModel build_shape_model(const TriangleMesh& shape, int resolution) {
-  ReconstructOptions options;
-  options.resolution = resolution;
-  const Reconstruction reconstruction = reconstruct(scan_shape(shape), options);
-  ShapeModel m;
-  m.tree = build_mc_octree(reconstruction);
-  m.lod = number_nodes(m.tree);
-  return m;
+  return scan2lod::testing::build_octree_model(scan_shape(shape), resolution);
 }
 
 O3 moved(const std::shared_ptr<O3>& m, double x) {

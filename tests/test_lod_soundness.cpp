@@ -27,19 +27,8 @@ using O3 = open3d::geometry::TriangleMesh;
 
 namespace {
 
-struct Built {
-  McOctree tree;
-  LodArray lod;
-};
-
-Built build(const OrientedPoints& points, int resolution) {
-  ReconstructOptions options;
-  options.resolution = resolution;
-  Built b;
-  b.tree = build_mc_octree(reconstruct(points, options));
-  b.lod = number_nodes(b.tree);
-  return b;
-}
+using Built = scan2lod::testing::OctreeModel;
+using scan2lod::testing::build_octree_model;
 
 // Checks every offered level, or `most` of them spread over the array (the
 // coarsest 100 always among them); returns how many it checked.
@@ -88,7 +77,7 @@ void expect_levels_all_the_way_down(const Built& b, const char* name, std::initi
 }  // namespace
 
 TEST(OctreeSoundness, EveryOfferedLevelOfTheBunnyAt64IsSound) {
-  const Built b = build(load_oriented_points({scan2lod::testing::bunny_scans()}), 64);
+  const Built b = build_octree_model(load_oriented_points({scan2lod::testing::bunny_scans()}), 64);
   EXPECT_EQ(expect_sound_levels(b, 1u << 30, "bunny R=64"), monotone_priorities(b.lod).size());
   // At R = 64 the last step of the coarsening brings an ear back whole
   // (214 to 700 triangles, no sound level between): 500 is not offered.
@@ -96,7 +85,7 @@ TEST(OctreeSoundness, EveryOfferedLevelOfTheBunnyAt64IsSound) {
 }
 
 TEST(OctreeSoundness, ABunnyAt128IsSoundAtAThousandLevels) {
-  const Built b = build(load_oriented_points({scan2lod::testing::bunny_scans()}), 128);
+  const Built b = build_octree_model(load_oriented_points({scan2lod::testing::bunny_scans()}), 128);
   EXPECT_GE(expect_sound_levels(b, 1000, "bunny R=128"), 1000u);
   expect_levels_all_the_way_down(b, "bunny R=128", {500, 1000, 2000, 5000});
 }
@@ -116,7 +105,7 @@ TEST(OctreeSoundness, ClosedShapesStayClosedAndWholeAtEveryOfferedLevel) {
                 {"torus", from_open3d(*O3::CreateTorus(1.0, 0.4, 200, 80))},
                 {"genus two", from_open3d(tori)}};
   for (const auto& s : shapes) {
-    const Built b = build(scan_shape(s.shape), 64);
+    const Built b = build_octree_model(scan_shape(s.shape), 64);
     expect_sound_levels(b, 1u << 30, s.name);
     expect_levels_all_the_way_down(b, s.name, {500, 1000});
   }

@@ -1,9 +1,14 @@
 // Shapes with known answers, shared by the tests: Open3D's primitives as plain
-// meshes, and their virtual range scans as oriented points.
+// meshes, their virtual range scans as oriented points, and the octree LOD
+// model of those points.
 #pragma once
 
 #include "acquisition/virtual_scanner.h"
 #include "core/types.h"
+#include "lod/lod_array.h"
+#include "lod/mc_octree.h"
+#include "lod/octree_order.h"
+#include "reconstruct/marching_cubes.h"
 
 #include <open3d/geometry/TriangleMesh.h>
 
@@ -19,6 +24,21 @@ inline TriangleMesh from_open3d(const open3d::geometry::TriangleMesh& m) {
 // The mesh scanned from `views` directions at size x size, as oriented points.
 inline OrientedPoints scan_shape(const TriangleMesh& mesh, int views = 14, int size = 256) {
   return virtual_scan_points(mesh, {views, size, size});
+}
+
+struct OctreeModel {
+  McOctree tree;
+  LodArray lod;
+};
+
+// Reconstructed at `resolution`, then built and numbered as `scan2lod build` does.
+inline OctreeModel build_octree_model(const OrientedPoints& points, int resolution) {
+  ReconstructOptions options;
+  options.resolution = resolution;
+  OctreeModel m;
+  m.tree = build_mc_octree(reconstruct(points, options));
+  m.lod = number_nodes(m.tree);
+  return m;
 }
 
 }  // namespace scan2lod::testing
