@@ -6,22 +6,33 @@
 // model with both structures as `scan2lod build` does (bench/model_build.h),
 // and each structure is checked on its own.
 //
-// The octree: the levels at 1, 5, 10, 20, 30, ..., 100 % (priority_for_percent,
-// the viewer's slider) are extracted and measured. It passes when, at every
-// level:
+// The octree: every offered level (monotone_priorities) is walked with a
+// LodCursor and measured; past 1500 offered levels, the coarsest 300 and 1200
+// more spread evenly over the rest. The viewer slider's levels at 1, 5, 10,
+// 20, 30, ..., 100 % (priority_for_percent) are extracted and judged too. It
+// passes when, at every checked level:
 //   loops     boundary loops <= the full mesh's (a new loop is a crack)
 //   nm        0 non-manifold edges
+//   comps     components (through shared vertices) <= the full mesh's
 //   degen     0 degenerate triangles
-//   accum     the accumulation table's count == the extracted count; also at
+//   accum     the accumulation table's count == the measured count; also at
 //             40 sampled offered and 20 sampled arbitrary priorities
-//   monotone  counts never fall, over the percent levels and over all
-//             offered priorities (monotone_priorities)
+//   monotone  counts never fall, over the checked levels, the percent levels
+//             and all offered priorities
 //   closed    only for shapes with a known answer (--expect-components and
-//             --expect-euler): 0 boundary edges, that many components and
-//             that Euler characteristic
-// Folded edges (interior edges whose triangles face opposite ways), singular
-// vertices (pinches: more than one fan of triangles) and whether a level has
-// the full mesh's topology are reported as information only.
+//             --expect-euler): 0 boundary edges and at most that many
+//             components; χ is information only (a coarse level may close a
+//             handle, and only the full mesh's χ is known)
+// and levels go all the way down:
+//   down      the coarsest offered level has at most 1 % of the full
+//             triangles (judged from 20 000 full triangles on)
+//   budget    priority_for_triangles(500, 1000, 2000, 5000, 20000; those
+//             under half the full count) gives at most the budget and at
+//             least 90 % of it
+// Folded edges (interior edges whose triangles face opposite ways) and
+// singular vertices (pinches: more than one fan of triangles) at the percent
+// levels, and the checked levels without the full mesh's topology, are
+// reported as information only.
 //
 // The cluster hierarchy ("sound", and "crack-free from any view"): every
 // uniform cut of cluster_cut_table with at least 1000 triangles (every cut of
@@ -37,9 +48,10 @@
 // triangles), the storage ratio, the hierarchy's build time and the coarser
 // cuts that would fail are reported as information.
 //
-// Output: one line per octree level, uniform cut and pixel error, then a
-// tab-separated `RESULT key=value ...` line. `--table FILE` turns the RESULT lines collected in FILE into the
-// markdown report instead; bench/lod/sweep.sh runs every case and does that.
+// Output: one line per checked octree level, budget, uniform cut and pixel
+// error, then a tab-separated `RESULT key=value ...` line. `--table FILE`
+// turns the RESULT lines collected in FILE into the markdown report instead;
+// bench/lod/sweep.sh runs every case and does that.
 //
 //   build/bin/scan2lod_bench_sweep --name NAME --resolution R
 //       (--shape S [--gap-cells G] | --scan-mesh FILE [--size P] [--views V]
@@ -58,14 +70,17 @@
 #include "io/mesh_file.h"
 #include "lod/extract.h"
 #include "lod/lod_array.h"
+#include "lod/lod_cursor.h"
 #include "lod/lod_model.h"
 #include "measure/topology.h"
 
 #include <CLI/CLI.hpp>
+#include <omp.h>
 #include <open3d/geometry/TriangleMesh.h>
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -229,13 +244,14 @@ struct Expectation {
 // The octree's rules, then the cluster hierarchy's (from kClusterLoops on):
 // each structure passes or fails on its own rules.
 enum Rule {
-  kLoops, kNonManifold, kDegenerate, kAccumulation, kMonotone, kClosed,
+  kLoops, kNonManifold, kComponents, kDegenerate, kAccumulation, kMonotone, kClosed, kDown, kBudget,
   kClusterLoops, kClusterNonManifold, kClusterComponents, kClusterCount, kClusterView,
   kRuleCount
 };
 constexpr Rule kFirstClusterRule = kClusterLoops;
 constexpr std::array<const char*, kRuleCount> kRuleKeys = {
-    "loops", "nm", "degen", "accum", "monotone", "closed", "cl_loops", "cl_nm", "cl_comps", "cl_count", "cl_view"};
+    "loops", "nm",    "comps",    "degen",    "accum",    "monotone", "closed",
+    "down",  "budget", "cl_loops", "cl_nm", "cl_comps", "cl_count", "cl_view"};
 
 // Where each rule first failed and what was seen there; per structure, the
 // first of its rules to fail.
@@ -447,16 +463,310 @@ ClusterResult check_clusters(const LodModel& model, const MeshTopology& octree_f
   return c;
 }
 
-int run_case(const std::string& name, int resolution, const OrientedPoints& points, double load_seconds,
-             const std::optional<Expectation>& expect) {
-  // Both structures, as `scan2lod build` makes them; the cluster hierarchy's
-  // build is timed on its own.
-  const TimedModel timed = build_model_timed(points, resolution, /*clusters=*/true);
-  const LodModel& model = timed.model;
-  const double build_seconds = load_seconds + timed.reconstruct_seconds + timed.octree_model_seconds();
+// ---------------------------------------------------------------------------
+// The octree's offered levels, walked with a LodCursor.
+
+// Every offered level is checked up to kWalkAll of them; beyond, the coarsest
+// kWalkCoarsest (where the coarsening does most of its work) and kWalkSpread
+// more spread evenly over the rest, the finest among them.
+constexpr std::size_t kWalkAll = 1500, kWalkCoarsest = 300, kWalkSpread = 1200;
+// Budgets for priority_for_triangles; only those under half the full count are judged.
+constexpr std::array<std::int64_t, 5> kBudgets = {500, 1000, 2000, 5000, 20000};
+// From this many full triangles on, the coarsest offered level must have at most 1 % of them.
+constexpr std::int64_t kDownFrom = 20000;
+
+// Indices into `offered` of the levels the walk checks, ascending.
+std::vector<std::size_t> walked_levels(std::size_t offered) {
+  std::vector<std::size_t> walked;
+  if (offered <= kWalkAll) {
+    for (std::size_t i = 0; i < offered; ++i) walked.push_back(i);
+    return walked;
+  }
+  for (std::size_t i = 0; i < kWalkCoarsest; ++i) walked.push_back(i);
+  const std::size_t rest = offered - kWalkCoarsest;
+  for (std::size_t k = 1; k <= kWalkSpread; ++k) walked.push_back(kWalkCoarsest + k * rest / kWalkSpread - 1);
+  return walked;
+}
+
+// The soundness rules at one offered level: loops, nm, comps, degen, and for
+// shapes with a known answer closed (no boundary, no more pieces than
+// expected; χ is not judged, as a coarse level may close a handle).
+void judge_level(const MeshTopology& t, const MeshTopology& full, const std::optional<Expectation>& expect,
+                 const std::string& at, Verdict* verdict) {
+  if (t.boundary_loops > full.boundary_loops)
+    verdict->fail(kLoops, at + format("%zu boundary loops, the full mesh %zu", t.boundary_loops, full.boundary_loops));
+  if (t.non_manifold_edges > 0) verdict->fail(kNonManifold, at + format("%zu non-manifold edges", t.non_manifold_edges));
+  if (t.components > full.components)
+    verdict->fail(kComponents, at + format("%zu components, the full mesh %zu", t.components, full.components));
+  if (t.degenerate_triangles > 0)
+    verdict->fail(kDegenerate, at + format("%zu degenerate triangles", t.degenerate_triangles));
+  if (expect && (t.boundary_edges != 0 || t.components > expect->components))
+    verdict->fail(kClosed, at + format("%zu boundary edges, %zu components, χ %ld (expected 0, ≤ %zu; χ %ld)",
+                                       t.boundary_edges, t.components, t.euler_characteristic, expect->components,
+                                       expect->euler));
+}
+
+// What the walk over the offered levels measured, beyond the verdict.
+struct Walk {
+  std::size_t offered = 0, checked = 0;
+  std::size_t max_loops = 0, max_comps = 0, max_nm = 0, max_degen = 0;
+  long min_euler = 0, max_euler = 0;
+  std::size_t other_topology = 0;  // checked levels without the full mesh's components or (closed) χ
+  double seconds = 0;
+};
+
+// Measures the walked levels, each thread with its own cursor moving up
+// through every thread-count-th of them (moves stay short and the threads'
+// shares alike), then judges them in order, so the first failure is the
+// coarsest.
+// mesh_topology's counts (but the largest component) for a mesh whose
+// vertices are all used (as compact_live makes them), in buffers kept from one
+// level to the next: the walk measures hundreds of levels of up to a million
+// triangles, and fresh arrays per level (page faults) were most of
+// mesh_topology's cost there. Edges are bucketed under their smaller vertex
+// (a counting sort). run_case checks it against mesh_topology at the slider's
+// levels.
+class LevelMeasure {
+ public:
+  MeshTopology operator()(const TriangleMesh& mesh) {
+    const std::size_t n = mesh.positions.size();
+    MeshTopology topo;
+    topo.vertices = n;
+    topo.triangles = mesh.triangles.size();
+    first_.assign(n + 1, 0);
+    referenced_.assign(n, 0);
+    std::size_t surface = 0;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const Triangle& tri = mesh.triangles[t];
+      if (triangle_is_degenerate(mesh, t)) ++topo.degenerate_triangles;
+      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
+      ++surface;
+      for (int k = 0; k < 3; ++k) {
+        ++first_[std::size_t(std::min(tri[k], tri[(k + 1) % 3])) + 1];
+        referenced_[std::size_t(tri[k])] = 1;
+      }
+    }
+    for (std::size_t v = 0; v < n; ++v) first_[v + 1] += first_[v];
+    other_.resize(first_[n]);
+    fill_ = first_;
+    for (const Triangle& tri : mesh.triangles) {
+      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t a = tri[k], b = tri[(k + 1) % 3];
+        other_[fill_[std::size_t(std::min(a, b))]++] = std::max(a, b);
+      }
+    }
+    count_edges(n, &topo);
+    for (std::size_t v = 0; v < n; ++v) topo.referenced_vertices += referenced_[v];
+    topo.euler_characteristic = long(topo.referenced_vertices) - long(topo.edges) + long(surface);
+    return topo;
+  }
+
+ private:
+  // Union-find with path halving over `parent`.
+  static std::uint32_t find(std::vector<std::uint32_t>& parent, std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  static void unite(std::vector<std::uint32_t>& parent, std::uint32_t a, std::uint32_t b) {
+    a = find(parent, a), b = find(parent, b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+  static void reset(std::vector<std::uint32_t>& parent, std::size_t n) {
+    parent.resize(n);
+    for (std::size_t v = 0; v < n; ++v) parent[v] = std::uint32_t(v);
+  }
+
+  // Edges, boundary edges and loops, non-manifold edges (runs of equal ends
+  // in each vertex's bucket), and components: vertices joined by edges are
+  // triangles joined through shared vertices.
+  void count_edges(std::size_t n, MeshTopology* topo) {
+    reset(pieces_, n);
+    reset(loops_, n);
+    on_boundary_.assign(n, 0);
+    for (std::size_t a = 0; a < n; ++a) {
+      const auto begin = other_.begin() + std::ptrdiff_t(first_[a]), end = other_.begin() + std::ptrdiff_t(first_[a + 1]);
+      std::sort(begin, end);
+      for (auto i = begin; i != end;) {
+        auto j = i;
+        while (j != end && *j == *i) ++j;
+        ++topo->edges;
+        unite(pieces_, std::uint32_t(a), std::uint32_t(*i));
+        if (j - i == 1) {
+          ++topo->boundary_edges;
+          unite(loops_, std::uint32_t(a), std::uint32_t(*i));
+          on_boundary_[a] = on_boundary_[std::size_t(*i)] = 1;
+        } else if (j - i > 2) {
+          ++topo->non_manifold_edges;
+        }
+        i = j;
+      }
+    }
+    for (std::size_t v = 0; v < n; ++v) {
+      topo->boundary_loops += on_boundary_[v] && find(loops_, std::uint32_t(v)) == v;
+      topo->components += referenced_[v] && find(pieces_, std::uint32_t(v)) == v;
+    }
+  }
+
+  std::vector<std::size_t> first_, fill_;
+  std::vector<std::int32_t> other_;
+  std::vector<std::uint32_t> pieces_, loops_;  // union-find parents: components, boundary loops
+  std::vector<std::uint8_t> referenced_, on_boundary_;
+};
+
+// Copies the live triangles of `cursor` into `level` with only the vertices
+// they use, renumbered: measuring a coarse level then costs its size, not the
+// model's vertex count. `remap` (one entry per model vertex, -1 between calls)
+// is reused across calls.
+void compact_live(const LodCursor& cursor, const std::vector<Vec3f>& positions, std::vector<std::int32_t>* remap,
+                  std::vector<Triangle>* live, TriangleMesh* level) {
+  cursor.live_triangles(live);
+  level->positions.clear();
+  level->triangles.resize(live->size());
+  for (std::size_t t = 0; t < live->size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      std::int32_t& id = (*remap)[std::size_t((*live)[t][k])];
+      if (id < 0) {
+        id = std::int32_t(level->positions.size());
+        level->positions.push_back(positions[std::size_t((*live)[t][k])]);
+      }
+      level->triangles[t][k] = id;
+    }
+  for (const Triangle& t : *live)
+    for (const std::int32_t v : t) (*remap)[std::size_t(v)] = -1;
+}
+
+std::vector<MeshTopology> measure_walked(const LodModel& model, const std::vector<std::size_t>& offered,
+                                         const std::vector<std::size_t>& walked) {
+  std::vector<MeshTopology> measured(walked.size());
+  std::string error;
+#pragma omp parallel
+  {
+    try {
+      const std::size_t threads = std::size_t(omp_get_num_threads()), me = std::size_t(omp_get_thread_num());
+      LodCursor cursor(model.octree->tree, model.octree->lod);
+      std::vector<std::int32_t> remap(model.vertices.positions.size(), -1);
+      std::vector<Triangle> live;
+      TriangleMesh level;
+      LevelMeasure measure;
+      for (std::size_t i = me; i < walked.size(); i += threads) {
+        cursor.move_to(offered[walked[i]]);
+        compact_live(cursor, model.vertices.positions, &remap, &live, &level);
+        measured[i] = measure(level);
+      }
+    } catch (const std::exception& e) {
+#pragma omp critical
+      error = e.what();
+    }
+  }
+  if (!error.empty()) throw std::runtime_error(error);
+  return measured;
+}
+
+Walk walk_offered_levels(const LodModel& model, const std::vector<std::size_t>& offered, const MeshTopology& full,
+                         const std::optional<Expectation>& expect, Verdict* verdict) {
+  const auto start = Clock::now();
+  const LodArray& lod = model.octree->lod;
+  const std::vector<std::size_t> walked = walked_levels(offered.size());
+  const std::vector<MeshTopology> measured = measure_walked(model, offered, walked);
+  Walk w;
+  w.offered = offered.size();
+  w.checked = walked.size();
+  w.min_euler = w.max_euler = full.euler_characteristic;
+  for (std::size_t i = 0; i < walked.size(); ++i) {
+    const MeshTopology& t = measured[i];
+    const std::size_t priority = offered[walked[i]];
+    std::printf("offered %zu p=%zu tris=%zu loops=%zu bedges=%zu nm=%zu degen=%zu comps=%zu euler=%ld\n", walked[i],
+                priority, t.triangles, t.boundary_loops, t.boundary_edges, t.non_manifold_edges,
+                t.degenerate_triangles, t.components, t.euler_characteristic);
+    const std::string at = format("offered level %zu (priority %zu, %zu triangles): ", walked[i], priority, t.triangles);
+    judge_level(t, full, expect, at, verdict);
+    if (std::int64_t(t.triangles) != lod.accumulated[priority])
+      verdict->fail(kAccumulation, at + format("the table %lld", (long long)lod.accumulated[priority]));
+    if (i > 0 && t.triangles < measured[i - 1].triangles)
+      verdict->fail(kMonotone, at + format("%zu at offered level %zu", measured[i - 1].triangles, walked[i - 1]));
+    w.max_loops = std::max(w.max_loops, t.boundary_loops);
+    w.max_comps = std::max(w.max_comps, t.components);
+    w.max_nm = std::max(w.max_nm, t.non_manifold_edges);
+    w.max_degen = std::max(w.max_degen, t.degenerate_triangles);
+    w.min_euler = std::min(w.min_euler, t.euler_characteristic);
+    w.max_euler = std::max(w.max_euler, t.euler_characteristic);
+    w.other_topology += t.components != full.components ||
+                        (full.boundary_edges == 0 && t.euler_characteristic != full.euler_characteristic);
+  }
+  w.seconds = seconds_since(start);
+  return w;
+}
+
+// Levels all the way down: the coarsest offered level (rule down) and the
+// level priority_for_triangles picks for each budget (rule budget: at most
+// the budget and at least 90 % of it).
+struct Down {
+  std::int64_t coarsest = 0;
+  double share = 0;        // of the full count, in %
+  std::string budgets;     // per budget, the level's triangles or "–" (not judged)
+  std::string worst;       // the budget farthest from its level, relatively: "500 → 214 (−57.2 %)"
+  bool worst_fails = false;
+  std::string largest_step;  // the largest rise between neighbouring offered levels: "5 → 29662"
+};
+
+Down check_down(const LodArray& lod, const std::vector<std::size_t>& offered, Verdict* verdict) {
+  Down d;
+  const std::int64_t full = lod.accumulated.back();
+  d.coarsest = lod.accumulated[offered.front()];
+  d.share = full > 0 ? 100.0 * double(d.coarsest) / double(full) : 0;
+  if (full >= kDownFrom && d.coarsest * 100 > full)
+    verdict->fail(kDown, format("offered level 0 (priority %zu): %lld triangles, %.2f %% of the full %lld",
+                                offered.front(), (long long)d.coarsest, d.share, (long long)full));
+  double worst_miss = -1;
+  for (const std::int64_t budget : kBudgets) {
+    d.budgets += d.budgets.empty() ? "" : "/";
+    if (2 * budget >= full) {
+      d.budgets += "–";
+      continue;
+    }
+    const std::size_t priority = priority_for_triangles(lod, budget);
+    const std::int64_t got = lod.accumulated[priority];
+    d.budgets += std::to_string(got);
+    const bool fails = got > budget || 10 * got < 9 * budget;
+    const std::string what = format("%lld → %lld (%+.1f %%)", (long long)budget, (long long)got,
+                                    100.0 * double(got - budget) / double(budget));
+    std::printf("budget %s at priority %zu%s\n", what.c_str(), priority, fails ? " FAIL" : "");
+    if (fails) verdict->fail(kBudget, format("budget %lld (priority %zu): %lld triangles", (long long)budget, priority,
+                                              (long long)got));
+    const double miss = std::abs(double(got - budget)) / double(budget);
+    if (miss > worst_miss) worst_miss = miss, d.worst = what, d.worst_fails = fails;
+  }
+  if (d.worst.empty()) d.worst = "–";
+  std::size_t step = 0;
+  for (std::size_t i = 1; i < offered.size(); ++i)
+    if (lod.accumulated[offered[i]] - lod.accumulated[offered[i - 1]] >
+        lod.accumulated[offered[step]] - lod.accumulated[offered[step > 0 ? step - 1 : 0]])
+      step = i;
+  d.largest_step = step == 0 ? "–"
+                             : format("%lld → %lld", (long long)lod.accumulated[offered[step - 1]],
+                                      (long long)lod.accumulated[offered[step]]);
+  return d;
+}
+
+// The walk's counts must be mesh_topology's: a mismatch is the sweep's bug,
+// not the model's.
+void check_measure(const MeshTopology& fast, const MeshTopology& t, double percent) {
+  if (fast.triangles != t.triangles || fast.boundary_edges != t.boundary_edges ||
+      fast.boundary_loops != t.boundary_loops || fast.non_manifold_edges != t.non_manifold_edges ||
+      fast.components != t.components || fast.degenerate_triangles != t.degenerate_triangles ||
+      fast.euler_characteristic != t.euler_characteristic)
+    throw std::logic_error(format("LevelMeasure disagrees with mesh_topology at %g %%", percent));
+}
+
+// The viewer slider's levels (priority_for_percent), extracted as the viewer
+// does and judged by the same rules; measured beyond them: folded edges and
+// singular vertices.
+std::vector<Level> check_percent_levels(const LodModel& model, const std::optional<Expectation>& expect,
+                                        Verdict* verdict) {
   const LodArray& lod = model.octree->lod;
   LevelExtractor extractor(model, LodStructure::kOctree);
-
+  LevelMeasure measure;
   std::vector<Level> levels;
   for (const double percent : kPercents) {
     Level l;
@@ -467,14 +777,12 @@ int run_case(const std::string& name, int resolution, const OrientedPoints& poin
     l.accumulated = lod.accumulated[l.priority];
     const TriangleMesh mesh = compact_level(model, cut.triangles);
     l.topology = mesh_topology(mesh);
+    check_measure(measure(mesh), l.topology, percent);
     l.folded = folded_edges(mesh);
     l.singular = singular_vertices(mesh);
     levels.push_back(l);
   }
   const MeshTopology& full = levels.back().topology;
-
-  Verdict verdict;
-  bool same_topology_as_full = true;
   for (std::size_t i = 0; i < levels.size(); ++i) {
     const Level& l = levels[i];
     const MeshTopology& t = l.topology;
@@ -484,34 +792,26 @@ int run_case(const std::string& name, int resolution, const OrientedPoints& poin
                 t.degenerate_triangles, t.components, t.euler_characteristic, l.folded, l.singular,
                 (long long)l.accumulated);
     const std::string at = fixed(l.percent, 0) + " % (priority " + std::to_string(l.priority) + "): ";
-    if (t.boundary_loops > full.boundary_loops)
-      verdict.fail(kLoops, at + format("%zu boundary loops, the full mesh %zu", t.boundary_loops, full.boundary_loops));
-    if (t.non_manifold_edges > 0) verdict.fail(kNonManifold, at + format("%zu non-manifold edges", t.non_manifold_edges));
-    if (t.degenerate_triangles > 0)
-      verdict.fail(kDegenerate, at + format("%zu degenerate triangles", t.degenerate_triangles));
+    judge_level(t, full, expect, at, verdict);
     if (l.accumulated != std::int64_t(l.extracted))
-      verdict.fail(kAccumulation, at + format("table %lld, extracted %zu", (long long)l.accumulated, l.extracted));
+      verdict->fail(kAccumulation, at + format("table %lld, extracted %zu", (long long)l.accumulated, l.extracted));
     if (i > 0 && t.triangles < levels[i - 1].topology.triangles)
-      verdict.fail(kMonotone, at + format("%zu triangles, %zu at %s %%", t.triangles, levels[i - 1].topology.triangles,
-                                          fixed(levels[i - 1].percent, 0).c_str()));
-    if (expect && (t.boundary_edges != 0 || t.components != expect->components || t.euler_characteristic != expect->euler))
-      verdict.fail(kClosed, at + format("%zu boundary edges, %zu components, χ %ld (expected 0, %zu, %ld)",
-                                        t.boundary_edges, t.components, t.euler_characteristic, expect->components,
-                                        expect->euler));
-    // Rims of an open full mesh may shrink or close at coarse levels, so χ
-    // is compared only when the full mesh is closed.
-    same_topology_as_full &= t.boundary_edges <= full.boundary_edges && t.components == full.components &&
-                             (full.boundary_edges > 0 || t.euler_characteristic == full.euler_characteristic);
+      verdict->fail(kMonotone, at + format("%zu triangles, %zu at %s %%", t.triangles, levels[i - 1].topology.triangles,
+                                           fixed(levels[i - 1].percent, 0).c_str()));
   }
+  return levels;
+}
 
-  // Between the percent levels: offered priorities never lose triangles, and
-  // the table holds at sampled priorities, offered or not (fixed seed).
-  const std::vector<std::size_t> offered = monotone_priorities(lod);
+// Offered priorities never lose triangles, and the table holds at sampled
+// priorities, offered or not (fixed seed), as extract_lod counts them.
+std::size_t check_table(const LodModel& model, const std::vector<std::size_t>& offered, Verdict* verdict) {
+  const LodArray& lod = model.octree->lod;
   for (std::size_t i = 1; i < offered.size(); ++i)
     if (lod.accumulated[offered[i]] < lod.accumulated[offered[i - 1]])
-      verdict.fail(kMonotone, format("offered priority %zu: %lld triangles, %lld at offered priority %zu", offered[i],
-                                     (long long)lod.accumulated[offered[i]], (long long)lod.accumulated[offered[i - 1]],
-                                     offered[i - 1]));
+      verdict->fail(kMonotone, format("offered priority %zu: %lld triangles, %lld at offered priority %zu", offered[i],
+                                      (long long)lod.accumulated[offered[i]],
+                                      (long long)lod.accumulated[offered[i - 1]], offered[i - 1]));
+  LevelExtractor extractor(model, LodStructure::kOctree);
   std::mt19937 rng(1);
   std::vector<std::size_t> sampled;
   for (int i = 0; i < 40 && !offered.empty(); ++i) sampled.push_back(offered[rng() % offered.size()]);
@@ -519,10 +819,33 @@ int run_case(const std::string& name, int resolution, const OrientedPoints& poin
   for (const std::size_t priority : sampled) {
     const std::size_t extracted = extractor.extract(LevelRequest::at_priority(priority)).triangles.size();
     if (std::int64_t(extracted) != lod.accumulated[priority])
-      verdict.fail(kAccumulation, format("sampled priority %zu: table %lld, extracted %zu", priority,
-                                         (long long)lod.accumulated[priority], extracted));
+      verdict->fail(kAccumulation, format("sampled priority %zu: table %lld, extracted %zu", priority,
+                                          (long long)lod.accumulated[priority], extracted));
   }
+  return sampled.size();
+}
 
+int run_case(const std::string& name, int resolution, const OrientedPoints& points, double load_seconds,
+             const std::optional<Expectation>& expect) {
+  // Both structures, as `scan2lod build` makes them; the cluster hierarchy's
+  // build is timed on its own.
+  const TimedModel timed = build_model_timed(points, resolution, /*clusters=*/true);
+  const LodModel& model = timed.model;
+  const double build_seconds = load_seconds + timed.reconstruct_seconds + timed.octree_model_seconds();
+  const LodArray& lod = model.octree->lod;
+  const std::vector<std::size_t> offered = monotone_priorities(lod);
+  if (offered.empty()) throw std::runtime_error("the octree offers no level");
+
+  // The walk's failures come first, so each rule's first failure is at the
+  // coarsest level walked; the slider's add the rules the walk did not fail.
+  Verdict verdict, slider;
+  const std::vector<Level> levels = check_percent_levels(model, expect, &slider);
+  const MeshTopology& full = levels.back().topology;
+  const Walk walk = walk_offered_levels(model, offered, full, expect, &verdict);
+  for (int r = 0; r < kFirstClusterRule; ++r)
+    if (!slider.failure[r].empty()) verdict.fail(Rule(r), slider.failure[r]);
+  const Down down = check_down(lod, offered, &verdict);
+  const std::size_t sampled = check_table(model, offered, &verdict);
   const ClusterResult cl = check_clusters(model, full, &verdict);
 
   std::printf("RESULT\tname=%s\tR=%d\tpass=%d\tfirst_fail=%s", name.c_str(), resolution, int(verdict.pass()),
@@ -531,20 +854,23 @@ int run_case(const std::string& name, int resolution, const OrientedPoints& poin
               verdict.cluster_pass() ? "-" : verdict.cluster_first.c_str());
   for (int r = 0; r < kRuleCount; ++r)
     if (!verdict.failure[r].empty()) std::printf("\tfail.%s=%s", kRuleKeys[r], verdict.failure[r].c_str());
-  std::printf("\texpect=%s\tsame_topology=%d", expect ? format("%zu/%ld", expect->components, expect->euler).c_str() : "–",
-              int(same_topology_as_full));
+  std::printf("\texpect=%s", expect ? format("%zu/%ld", expect->components, expect->euler).c_str() : "–");
   std::printf("\tfull=%zu/%zu/%zu/%ld", full.triangles, full.boundary_loops, full.components, full.euler_characteristic);
+  const std::string euler_range = walk.min_euler == walk.max_euler
+                                      ? std::to_string(walk.min_euler)
+                                      : format("%ld to %ld", walk.min_euler, walk.max_euler);
+  std::printf("\toffered=%zu\tchecked=%zu\twalk_max=%zu/%zu/%zu/%zu\twalk_euler=%s\tother_topology=%zu\twalk_s=%.1f",
+              walk.offered, walk.checked, walk.max_loops, walk.max_comps, walk.max_nm, walk.max_degen,
+              euler_range.c_str(), walk.other_topology, walk.seconds);
+  std::printf("\tcoarsest=%lld\tcoarsest_share=%.2f\tbudgets=%s\tworst_budget=%s\tworst_budget_fails=%d"
+              "\tlargest_step=%s",
+              (long long)down.coarsest, down.share, down.budgets.c_str(), down.worst.c_str(), int(down.worst_fails),
+              down.largest_step.c_str());
   std::printf("\ttris=%s", joined(levels, [](const Level& l) { return l.topology.triangles; }).c_str());
-  std::printf("\tloops=%s", joined(levels, [](const Level& l) { return l.topology.boundary_loops; }).c_str());
-  std::printf("\tcomps=%s", joined(levels, [](const Level& l) { return l.topology.components; }).c_str());
   std::printf("\teuler=%s", joined(levels, [](const Level& l) { return l.topology.euler_characteristic; }).c_str());
-  std::printf("\tmax_nm=%zu\tmax_degen=%zu\tmax_folded=%zu\tmax_singular=%zu",
-              largest(levels, [](const Level& l) { return l.topology.non_manifold_edges; }),
-              largest(levels, [](const Level& l) { return l.topology.degenerate_triangles; }),
-              largest(levels, [](const Level& l) { return l.folded; }),
+  std::printf("\tmax_folded=%zu\tmax_singular=%zu", largest(levels, [](const Level& l) { return l.folded; }),
               largest(levels, [](const Level& l) { return l.singular; }));
-  std::printf("\tnodes=%zu\toffered=%zu\tsampled=%zu\tbuild_s=%.1f", model.octree->tree.size(), offered.size(),
-              sampled.size(), build_seconds);
+  std::printf("\tnodes=%zu\tsampled=%zu\tbuild_s=%.1f", model.octree->tree.size(), sampled, build_seconds);
   std::printf("\tcl_full=%zu/%zu/%zu/%ld\tcl_full_same=%d", cl.full.triangles, cl.full.boundary_loops,
               cl.full.components, cl.full.euler_characteristic, int(cl.full_same_as_octree));
   std::printf("\tcl_cuts=%zu/%zu\tcl_unjudged_bad=%zu\tcl_smallest_judged=%lld", cl.judged, cl.cuts,
@@ -671,13 +997,23 @@ int print_table(const std::string& path, const std::string& command, const std::
 
   std::printf(
       "Each case is built as `scan2lod build` builds it, at resolution R, with both structures.\n\n"
-      "**Octree.** Its levels at 1, 5, 10, 20, 30, "
-      "…, 100 %% (`priority_for_percent`, the viewer's slider) are measured. It passes when at every level: "
-      "boundary loops ≤ the full mesh's (*loops*; a new loop is a crack), 0 non-manifold edges (*nm*), 0 "
-      "degenerate triangles (*degen*), the accumulation table's count = the extracted count, also at 60 sampled "
-      "priorities, offered or not (*accum*), and counts never fall over the levels and the offered priorities "
+      "**Octree.** Every offered level (`monotone_priorities`) is walked with a `LodCursor` and measured by "
+      "`mesh_topology`; a case with more than %zu offered levels has its coarsest %zu and %zu more spread evenly over "
+      "the rest checked (the finest among them; *offered (checked)*). The 12 levels of the viewer's slider (1, 5, 10, "
+      "20, 30, …, 100 %%, `priority_for_percent`) are extracted as the viewer does and judged the same way. It passes "
+      "when at every checked level: boundary loops ≤ the full mesh's (*loops*; a new loop is a crack), 0 "
+      "non-manifold edges (*nm*), components (through shared vertices) ≤ the full mesh's (*comps*), 0 degenerate "
+      "triangles (*degen*), the accumulation table's count = the measured count, also at 60 sampled priorities, "
+      "offered or not (*accum*), and counts never fall over the checked levels and the table's offered priorities "
       "(*monotone*). Shapes with a known answer (the *expected* column: components / χ) must also have 0 boundary "
-      "edges and that topology at every level (*closed*).\n\n");
+      "edges and at most that many components at every checked level (*closed*); χ is information only, as a "
+      "coarse level may close a handle (it may not open one, but only the full mesh's χ is known). Levels go all "
+      "the way down: from %lld full triangles on, the coarsest offered level has at most 1 %% of them (*down*), and "
+      "`priority_for_triangles` gives for each budget of %s under half the full count a level of at most the "
+      "budget and at least 90 %% of it (*budget*; *worst budget miss*: the budget farthest from its level, "
+      "relatively, **bold** when it fails; *largest step*: the largest rise in triangles between neighbouring "
+      "offered levels, information).\n\n",
+      kWalkAll, kWalkCoarsest, kWalkSpread, (long long)kDownFrom, "500, 1000, 2000, 5000 and 20000");
   std::printf(
       "**Cluster hierarchy.** Every uniform cut of `cluster_cut_table` with at least %lld triangles (every cut when "
       "the full mesh has fewer than %lld) is extracted at its error (`LevelRequest::at_error`), and so is the cut of "
@@ -694,30 +1030,38 @@ int print_table(const std::string& path, const std::string& command, const std::
       "0.5, 1, 2, 4 and 8", kViewHeight, (long long)kCoarsestFlag);
   std::printf(
       "Shapes are Open3D's, scanned by the virtual scanner from 14 views at 256² (*virtual P*: the bunny mesh at "
-      "P²); `bun_sub2` and `bun_sub3` are bun000 + bun045 and bun000 + bun090 + bun180 of `bun.conf`. Per-level "
-      "lists run over the 12 levels and are shown once when all equal. *Same topology*: every level has the full "
-      "mesh's components and (closed full meshes) χ, information only, as are folded edges (interior edges whose "
-      "triangles face opposite ways) and singular vertices (pinches). *s*: scanning + octree build.\n\n");
+      "P²); `bun_sub2` and `bun_sub3` are bun000 + bun045 and bun000 + bun090 + bun180 of `bun.conf`. *Max "
+      "loops / comps / nm / degen* and *χ* (its range) are over the checked levels; *other topology*: checked "
+      "levels without the full mesh's components or (closed full meshes) its χ, information only. Over the "
+      "slider's 12 levels, as information: their χ (shown once when all equal), folded edges (interior edges whose "
+      "triangles face opposite ways) and singular vertices (pinches). *s*: scanning + octree build; *walk s*: "
+      "the walk over the offered levels (both cores).\n\n");
 
   const int octree_rules = kFirstClusterRule, all_rules = kRuleCount;
   std::printf("| case | R | octree | clusters | octree: failed rules (first level) | expected | "
-              "full: triangles / loops / comps / χ | triangles at 1 %% | loops | components | χ | same topology | "
-              "max nm | max degen | max folded | max singular | s |\n");
-  std::printf("|---|--:|---|---|---|---|---|--:|---|---|---|---|--:|--:|--:|--:|--:|\n");
+              "full: triangles / loops / comps / χ | offered (checked) | coarsest: triangles (%% of full) | "
+              "budgets 500 / 1000 / 2000 / 5000 / 20000 | worst budget miss | largest step | max loops / comps / nm / degen | χ | "
+              "other topology | slider χ | max folded | max singular | s | walk s |\n");
+  std::printf("|---|--:|---|---|---|---|---|--:|--:|---|---|---|---|---|--:|---|--:|--:|--:|--:|\n");
   for (const Result& r : results) {
     if (get(r, "pass").empty()) {
-      std::printf("| %s | %s | **%s** | | | | | | | | | | | | | | |\n", get(r, "name").c_str(), get(r, "R").c_str(),
-                  get(r, "status").c_str());
+      std::printf("| %s | %s | **%s** | | | | | | | | | | | | | | | | | |\n", get(r, "name").c_str(),
+                  get(r, "R").c_str(), get(r, "status").c_str());
       continue;
     }
-    std::printf("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n",
+    const std::string worst =
+        get(r, "worst_budget_fails") == "1" ? "**" + get(r, "worst_budget") + "**" : get(r, "worst_budget");
+    std::printf("| %s | %s | %s | %s | %s | %s | %s | %s (%s) | %s (%s %%) | %s | %s | %s | %s | %s | %s | %s | %s | "
+                "%s | %s | %s |\n",
                 get(r, "name").c_str(), get(r, "R").c_str(), outcome(get(r, "pass")).c_str(),
                 outcome(get(r, "cl_pass")).c_str(), failed_rules(r, "first_fail", 0, octree_rules).c_str(),
-                get(r, "expect").c_str(), spaced(get(r, "full")).c_str(),
-                get(r, "tris").substr(0, get(r, "tris").find('/')).c_str(), per_level(get(r, "loops")).c_str(),
-                per_level(get(r, "comps")).c_str(), per_level(get(r, "euler")).c_str(),
-                get(r, "same_topology") == "1" ? "yes" : "no", get(r, "max_nm").c_str(), get(r, "max_degen").c_str(),
-                get(r, "max_folded").c_str(), get(r, "max_singular").c_str(), get(r, "build_s").c_str());
+                get(r, "expect").c_str(), spaced(get(r, "full")).c_str(), get(r, "offered").c_str(),
+                get(r, "checked").c_str(), get(r, "coarsest").c_str(), get(r, "coarsest_share").c_str(),
+                spaced(get(r, "budgets")).c_str(), worst.c_str(), get(r, "largest_step").c_str(),
+                spaced(get(r, "walk_max")).c_str(),
+                get(r, "walk_euler").c_str(), get(r, "other_topology").c_str(), per_level(get(r, "euler")).c_str(),
+                get(r, "max_folded").c_str(), get(r, "max_singular").c_str(), get(r, "build_s").c_str(),
+                get(r, "walk_s").c_str());
   }
 
   std::printf("\n## The cluster hierarchy\n\n");

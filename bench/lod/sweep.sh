@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Runs the LOD robustness sweep from an existing build: every case below in its
 # own scan2lod_bench_sweep process, one after the other (bench/lod/shape_sweep.cpp
-# says what is checked: the octree's levels and the cluster hierarchy's uniform
-# and view cuts), then prints the markdown report (progress goes to stderr).
+# says what is checked: every offered level of the octree, how far down its
+# levels go, and the cluster hierarchy's uniform and view cuts), then prints
+# the markdown report (progress goes to stderr).
 # Builds nothing.
 #
 #   bench/lod/sweep.sh [--build DIR] [--write] [--quick] [--only REGEX] [--shared DIR] [--logs DIR]
@@ -16,8 +17,8 @@
 #   --logs DIR    keep each case's per-level output in DIR/<name>_<R>.log
 #
 # Examples:
-#   bench/lod/sweep.sh --build build --quick        # ~50 s
-#   bench/lod/sweep.sh --build build --write        # all 74 cases, ~5 min on 2 cores
+#   bench/lod/sweep.sh --build build --quick        # ~2 min
+#   bench/lod/sweep.sh --build build --write        # all 74 cases, ~10 min on 2 cores
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
