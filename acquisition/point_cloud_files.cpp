@@ -1,5 +1,6 @@
 #include "acquisition/point_cloud_files.h"
 
+#include "acquisition/ply_header.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
 
@@ -14,14 +15,6 @@
 
 namespace scan2lod {
 namespace {
-
-// A line as it may appear in a message: bounded and printable.
-std::string shown(const std::string& line) {
-  std::string s = line.substr(0, 60);
-  for (char& c : s)
-    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
-  return line.size() > 60 ? s + "..." : s;
-}
 
 bool little_endian() {
   const std::uint16_t one = 1;
@@ -64,7 +57,7 @@ std::size_t scalar_size(Scalar s) {
 }
 
 struct VertexLayout {
-  enum class Format { ascii, binary_le, binary_be } format = Format::ascii;
+  PlyHeader::Format format = PlyHeader::Format::ascii;
   std::size_t header_bytes = 0;
   std::size_t vertices = 0;
   std::vector<Scalar> types;
@@ -90,75 +83,46 @@ int property_role(const std::string& name) {
   return -1;
 }
 
-// The header is parsed here so that each complaint names the line.
+// The header is read by read_ply_header and judged here, each complaint
+// naming the line.
 VertexLayout read_vertex_layout(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open file");
+  const PlyHeader h = read_ply_header(path, in);
   VertexLayout L;
-  std::string line;
-  if (!std::getline(in, line) || line.rfind("ply", 0) != 0)
-    throw InputError(path, "not a PLY file (the first line must be 'ply')");
-  L.header_bytes = line.size() + 1;
-  std::string element;
-  bool seen_vertex = false, after_vertex = false, ended = false, seen_format = false;
-  for (std::size_t n = 2; !ended && std::getline(in, line); ++n) {
-    L.header_bytes += line.size() + 1;
-    if (n > 10000) throw InputError(path, "PLY header has no 'end_header' in 10000 lines");
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ls(line);
-    std::string key;
-    ls >> key;
-    auto fail = [&](const std::string& what) {
-      throw InputError(path, "header line " + std::to_string(n) + " ('" + shown(line) + "'): " + what);
-    };
-    if (key == "format") {
-      std::string f;
-      ls >> f;
-      seen_format = true;
-      if (f == "ascii") L.format = VertexLayout::Format::ascii;
-      else if (f == "binary_little_endian") L.format = VertexLayout::Format::binary_le;
-      else if (f == "binary_big_endian") L.format = VertexLayout::Format::binary_be;
-      else fail("expected ascii, binary_little_endian or binary_big_endian");
-    } else if (key == "element") {
-      long long count = -1;
-      ls >> element >> count;
-      if (count < 0) fail("expected 'element NAME COUNT' with COUNT >= 0");
-      if (seen_vertex && element != "vertex") after_vertex = true;
-      if (element == "vertex") {
-        if (seen_vertex) fail("element 'vertex' appears twice");
-        if (count > 0x7fffffffLL) fail("more than 2^31 vertices");
-        seen_vertex = true;
-        L.vertices = std::size_t(count);
-      } else if (element == "face" && count > 0) {
-        fail("the file has faces: a mesh, not a point cloud");
-      } else if (!seen_vertex && count > 0) {
-        fail("element '" + element + "' before the vertices; a point cloud PLY starts with its vertices");
-      }
-    } else if (key == "property") {
-      std::string type, name;
-      ls >> type >> name;
-      if (element != "vertex" || after_vertex) continue;  // other elements are not read
+  L.format = h.format;
+  L.header_bytes = h.bytes;
+  const bool seen_format = h.has_format;
+  bool seen_vertex = false;
+  for (const PlyElement& e : h.elements) {
+    if (e.name == "vertex") {
+      if (seen_vertex) fail_at(path, e.line, "element 'vertex' appears twice");
+      if (e.count > 0x7fffffffULL) fail_at(path, e.line, "more than 2^31 vertices");
+      seen_vertex = true;
+      L.vertices = e.count;
+    } else if (e.name == "face" && e.count > 0) {
+      fail_at(path, e.line, "the file has faces: a mesh, not a point cloud");
+    } else if (!seen_vertex && e.count > 0) {
+      fail_at(path, e.line, "element '" + e.name + "' before the vertices; a point cloud PLY starts with its vertices");
+    }
+    if (e.name != "vertex") continue;  // other elements are not read
+    for (const PlyProperty& p : e.properties) {
       Scalar s;
-      if (type == "list") fail("vertex properties must be scalars");
-      if (!scalar_type(type, &s)) fail("unknown property type '" + type + "'");
-      const int role = property_role(name);
+      if (p.type == "list") fail_at(path, p.line, "vertex properties must be scalars");
+      if (!scalar_type(p.type, &s)) fail_at(path, p.line, "unknown property type '" + p.type + "'");
+      const int role = property_role(p.name);
       const int slot = int(L.types.size());
       if (role >= 0) {
         int* target = role < 3 ? &L.xyz[role] : role < 6 ? &L.normal[role - 3] : &L.rgb[role - 6];
-        if (*target >= 0) fail("property '" + name + "' given twice");
-        if (role < 6 && s != Scalar::f32 && s != Scalar::f64) fail("'" + name + "' must be float or double");
+        if (*target >= 0) fail_at(path, p.line, "property '" + p.name + "' given twice");
+        if (role < 6 && s != Scalar::f32 && s != Scalar::f64) fail_at(path, p.line, "'" + p.name + "' must be float or double");
         *target = slot;
       }
       L.types.push_back(s);
       L.offsets.push_back(L.stride);
       L.stride += scalar_size(s);
-    } else if (key == "end_header") {
-      ended = true;
-    } else if (key != "comment" && key != "obj_info" && !key.empty()) {
-      fail("unknown keyword '" + shown(key) + "'");
     }
   }
-  if (!ended) throw InputError(path, "PLY header ends before 'end_header'");
   if (!seen_format) throw InputError(path, "PLY header has no 'format' line");
   if (!seen_vertex || L.vertices == 0) throw InputError(path, "PLY file has no vertices");
   if (L.xyz[0] < 0 || L.xyz[1] < 0 || L.xyz[2] < 0)
@@ -239,7 +203,7 @@ int parse_numbers(std::string_view line, double* values, int max) {
 void read_ply_body(const std::string& path, const VertexLayout& L, PointCloud* cloud) {
   const std::size_t n = L.vertices;
   std::vector<double> values(L.types.size());
-  if (L.format == VertexLayout::Format::ascii) {
+  if (L.format == PlyHeader::Format::ascii) {
     const std::string text = read_whole(path, L.header_bytes);
     LineReader lines{text};
     std::string_view line;
@@ -252,7 +216,7 @@ void read_ply_body(const std::string& path, const VertexLayout& L, PointCloud* c
       const int count = parse_numbers(line, values.data(), int(values.size()));
       if (count != int(values.size()))
         throw InputError(path, "vertex " + std::to_string(i) + " needs " + std::to_string(values.size()) +
-                                   " numbers, got '" + shown(std::string(line)) + "'");
+                                   " numbers, got '" + shown_line(std::string(line)) + "'");
       store_vertex(L, values.data(), i, cloud);
     }
     return;
@@ -268,7 +232,7 @@ void read_ply_body(const std::string& path, const VertexLayout& L, PointCloud* c
   std::vector<unsigned char> body(need);
   if (!in.read(reinterpret_cast<char*>(body.data()), std::streamsize(need)))
     throw InputError(path, "could not read the vertex data");
-  const bool swap = (L.format == VertexLayout::Format::binary_be) == little_endian();
+  const bool swap = (L.format == PlyHeader::Format::binary_be) == little_endian();
   for (std::size_t i = 0; i < n; ++i) {
     const unsigned char* v = &body[i * L.stride];
     for (std::size_t k = 0; k < L.types.size(); ++k) values[k] = decode(v + L.offsets[k], L.types[k], swap);
@@ -285,7 +249,7 @@ PointCloud read_point_cloud_ply(const std::string& path) {
   std::error_code ec;
   const std::uint64_t size = std::filesystem::file_size(path, ec);
   const std::uint64_t body = ec || size < L.header_bytes ? 0 : size - L.header_bytes;
-  const std::uint64_t least = L.format == VertexLayout::Format::ascii ? 2 * L.types.size() : L.stride;
+  const std::uint64_t least = L.format == PlyHeader::Format::ascii ? 2 * L.types.size() : L.stride;
   if (std::uint64_t(L.vertices) > body / std::max<std::uint64_t>(least, 1))
     throw InputError(path, "the header promises " + std::to_string(L.vertices) + " vertices, the file's " +
                                std::to_string(body) + " bytes of data cannot hold them (truncated)");
@@ -312,7 +276,7 @@ PointCloud read_point_cloud_text(const std::string& path) {
     if (first == std::string_view::npos || line[first] == '#' || line.substr(first, 2) == "//") continue;
     const int count = parse_numbers(line, v, 10);
     auto fail = [&](const std::string& what) {
-      throw InputError(path, "line " + std::to_string(lines.number) + " ('" + shown(std::string(line)) +
+      throw InputError(path, "line " + std::to_string(lines.number) + " ('" + shown_line(std::string(line)) +
                                  "'): " + what);
     };
     if (count < 0) fail("expected numbers only");

@@ -1,5 +1,6 @@
 #include "acquisition/range_grid_ply.h"
 
+#include "acquisition/ply_header.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
 
@@ -23,7 +24,7 @@ namespace scan2lod {
 namespace {
 
 struct PlyLayout {
-  enum class Format { ascii, binary_le, binary_be } format = Format::ascii;
+  PlyHeader::Format format = PlyHeader::Format::ascii;
   std::size_t header_bytes = 0;
   std::size_t header_lines = 0;
   long cols = -1, rows = -1;
@@ -41,103 +42,62 @@ struct PlyLayout {
   std::vector<std::string> vertex_names, vertex_types;  // in file order
 };
 
-std::size_t type_size(const std::string& t) {
-  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
-  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" ||
-      t == "float32")
-    return 4;
-  if (t == "double" || t == "float64") return 8;
-  return 0;
-}
-
-// The header is parsed here, not left to PCL, so that every complaint names the
-// file and the line; PCL reports most problems only as "parse error".
+// The header is read by read_ply_header and judged here, not left to PCL, so
+// that every complaint names the file and the line; PCL reports most
+// problems only as "parse error".
 PlyLayout read_layout(const std::string& path, std::ifstream& in) {
+  const PlyHeader h = read_ply_header(path, in);
   PlyLayout L;
-  std::string line;
-  if (!std::getline(in, line) || line.rfind("ply", 0) != 0)
-    throw InputError(path, "not a PLY file (the first line must be 'ply')");
-  L.header_bytes = line.size() + 1;
-  std::string element;
-  bool ended = false;
-  for (std::size_t n = 2; std::getline(in, line); ++n) {
-    L.header_bytes += line.size() + 1;
-    L.header_lines = n;
-    if (n > 10000) throw InputError(path, "PLY header has no 'end_header' in 10000 lines");
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ls(line);
-    std::string key;
-    ls >> key;
-    auto fail = [&](const std::string& what) {
-      throw InputError(path, "header line " + std::to_string(n) + " ('" + line + "'): " + what);
-    };
-    // PCL asserts (aborts) on an obj_info line that does not start with the keyword.
-    if (!line.empty() && std::isspace(static_cast<unsigned char>(line[0])))
-      fail("starts with blanks; a header line starts with its keyword");
-    if (key == "format") {
-      std::string f;
-      ls >> f;
-      if (f == "ascii") L.format = PlyLayout::Format::ascii;
-      else if (f == "binary_little_endian") L.format = PlyLayout::Format::binary_le;
-      else if (f == "binary_big_endian") L.format = PlyLayout::Format::binary_be;
-      else fail("expected ascii, binary_little_endian or binary_big_endian");
-    } else if (key == "obj_info") {
-      std::string name;
-      long value = -1;
-      ls >> name;
-      if (name == "num_cols" || name == "num_rows") {
-        if (!(ls >> value) || value <= 0 || value > 100000) fail("expected a positive size");
-        (name == "num_cols" ? L.cols : L.rows) = value;
-      }
-    } else if (key == "element") {
-      long long count = -1;
-      ls >> element >> count;
-      if (count < 0) fail("expected 'element NAME COUNT' with COUNT >= 0");
-      if ((element == "vertex" && L.has_vertex) || (element == "range_grid" && L.has_grid))
-        fail("element '" + element + "' appears twice");
-      // The body checks below read the vertices first, as PCL's writer puts them.
-      if (element == "range_grid" && !L.has_vertex) fail("element range_grid must follow element vertex");
-      if (element == "vertex") L.vertices = std::size_t(count), L.has_vertex = true;
-      else if (element == "range_grid") L.grid_cells = std::size_t(count), L.has_grid = true;
-      else if (element == "face") L.faces = std::size_t(count);
-      else if (count > 0) fail("unexpected element '" + element + "' in a range-grid PLY");
-    } else if (key == "property") {
-      std::string type, name;
-      ls >> type;
-      if (element == "vertex") {
-        if (type == "list") fail("vertex properties must be scalars");
-        ls >> name;
-        std::size_t size = type_size(type);
-        if (size == 0) fail("unknown property type '" + type + "'");
+  L.format = h.format;
+  L.header_bytes = h.bytes;
+  L.header_lines = h.lines;
+  for (const PlyHeaderLine& info : h.obj_info) {
+    std::istringstream ls(info.text);
+    std::string name;
+    long value = -1;
+    ls >> name;
+    if (name == "num_cols" || name == "num_rows") {
+      if (!(ls >> value) || value <= 0 || value > 100000) fail_at(path, info, "expected a positive size");
+      (name == "num_cols" ? L.cols : L.rows) = value;
+    }
+  }
+  for (const PlyElement& e : h.elements) {
+    if ((e.name == "vertex" && L.has_vertex) || (e.name == "range_grid" && L.has_grid))
+      fail_at(path, e.line, "element '" + e.name + "' appears twice");
+    // The body checks below read the vertices first, as PCL's writer puts them.
+    if (e.name == "range_grid" && !L.has_vertex) fail_at(path, e.line, "element range_grid must follow element vertex");
+    if (e.name == "vertex") L.vertices = e.count, L.has_vertex = true;
+    else if (e.name == "range_grid") L.grid_cells = e.count, L.has_grid = true;
+    else if (e.name == "face") L.faces = e.count;
+    else if (e.count > 0) fail_at(path, e.line, "unexpected element '" + e.name + "' in a range-grid PLY");
+    for (const PlyProperty& p : e.properties) {
+      if (e.name == "vertex") {
+        if (p.type == "list") fail_at(path, p.line, "vertex properties must be scalars");
+        const std::size_t size = ply_scalar_size(p.type);
+        if (size == 0) fail_at(path, p.line, "unknown property type '" + p.type + "'");
         ++L.vertex_properties;
         L.vertex_stride += size;
-        L.vertex_names.push_back(name);
-        L.vertex_types.push_back(type);
-        if (name == "x" || name == "y" || name == "z") {
-          if (type != "float" && type != "float32") fail("x, y, z must be float");
-          L.has_xyz[name[0] - 'x'] = true;
+        L.vertex_names.push_back(p.name);
+        L.vertex_types.push_back(p.type);
+        if (p.name == "x" || p.name == "y" || p.name == "z") {
+          if (p.type != "float" && p.type != "float32") fail_at(path, p.line, "x, y, z must be float");
+          L.has_xyz[p.name[0] - 'x'] = true;
         }
-      } else if (element == "range_grid") {
-        std::string count_type, index_type;
-        ls >> count_type >> index_type;
+      } else if (e.name == "range_grid") {
+        const std::string& count_type = p.count_type;
         const bool integer_count = count_type.find("int") != std::string::npos ||
                                    count_type.find("char") != std::string::npos ||
                                    count_type.find("short") != std::string::npos;
-        const bool integer_index = index_type == "int" || index_type == "int32" ||
-                                   index_type == "uint" || index_type == "uint32";
-        if (type != "list" || type_size(count_type) == 0 || !integer_count || !integer_index ||
+        const bool integer_index = p.index_type == "int" || p.index_type == "int32" ||
+                                   p.index_type == "uint" || p.index_type == "uint32";
+        if (p.type != "list" || ply_scalar_size(count_type) == 0 || !integer_count || !integer_index ||
             ++L.grid_properties > 1)
-          fail("range_grid must have one property, 'property list uchar int vertex_indices'");
-        L.grid_count_size = type_size(count_type);
+          fail_at(path, p.line, "range_grid must have one property, 'property list uchar int vertex_indices'");
+        L.grid_count_size = ply_scalar_size(count_type);
         L.grid_count_signed = count_type[0] != 'u';
       }
-    } else if (key == "end_header") {
-      ended = true;
-      break;
     }
   }
-  if (!ended) throw InputError(path, "PLY header ends before 'end_header'");
   if (!L.has_grid) throw InputError(path, "no 'element range_grid': not a range-grid PLY");
   if (L.cols <= 0 || L.rows <= 0)
     throw InputError(path, "range-grid PLY lacks 'obj_info num_cols' / 'obj_info num_rows'");
@@ -238,7 +198,7 @@ void check_binary_grid(const std::string& path, const PlyLayout& L) {
   std::ifstream in(path, std::ios::binary);
   in.seekg(std::streamoff(L.header_bytes + L.vertices * L.vertex_stride));
   const std::vector<char> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const bool big_endian = L.format == PlyLayout::Format::binary_be;
+  const bool big_endian = L.format == PlyHeader::Format::binary_be;
   std::size_t at = 0;
   // Reads `size` bytes as a two's-complement integer; false at the end of the data.
   auto next = [&](std::size_t size, bool is_signed, long long& value) {
@@ -304,7 +264,7 @@ RangeImage decode_binary(const std::string& path, const PlyLayout& L) {
   std::ifstream in(path, std::ios::binary);
   in.seekg(std::streamoff(L.header_bytes));
   std::vector<char> body((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const bool swap = L.format == PlyLayout::Format::binary_be;
+  const bool swap = L.format == PlyHeader::Format::binary_be;
   auto scalar = [&](std::size_t at, std::size_t size, char* out) {
     for (std::size_t k = 0; k < size; ++k) out[k] = body[at + (swap ? size - 1 - k : k)];
   };
@@ -316,9 +276,9 @@ RangeImage decode_binary(const std::string& path, const PlyLayout& L) {
     for (int r = 0; r < 7; ++r)
       if (L.vertex_names[k] == kNames[r] &&
           (r < 4 ? L.vertex_types[k] == "float" || L.vertex_types[k] == "float32"
-                 : type_size(L.vertex_types[k]) == 1))
+                 : ply_scalar_size(L.vertex_types[k]) == 1))
         offset[r] = long(at);
-    at += type_size(L.vertex_types[k]);
+    at += ply_scalar_size(L.vertex_types[k]);
   }
   const bool colors = offset[4] >= 0 && offset[5] >= 0 && offset[6] >= 0;
   RangeImage image;
@@ -360,14 +320,14 @@ RangeImage read_range_grid_ply(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open file");
   PlyLayout L = read_layout(path, in);
-  if (L.format == PlyLayout::Format::ascii) check_ascii_body(path, in, L);
+  if (L.format == PlyHeader::Format::ascii) check_ascii_body(path, in, L);
   in.close();
-  if (L.format != PlyLayout::Format::ascii) {
+  if (L.format != PlyHeader::Format::ascii) {
     check_binary_size(path, L);
     check_binary_grid(path, L);
   }
 
-  if (L.format != PlyLayout::Format::ascii && !needs_pcl(L)) return decode_binary(path, L);
+  if (L.format != PlyHeader::Format::ascii && !needs_pcl(L)) return decode_binary(path, L);
 
   pcl::PCLPointCloud2 cloud;
   Eigen::Vector4f origin;
