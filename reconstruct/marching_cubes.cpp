@@ -109,12 +109,7 @@ class SurfaceBuilder {
     leaf_of_.resize(cube_keys_.size(), -1);
     select_leaves(cubes);
     const std::size_t end = leaf_cube_.size();
-    reserve_room(&leaf_edge_vertices_, end);
-    reserve_room(&leaf_edge_ratios_, end);
-    reserve_room(&leaf_first_triangle_, end);
-    leaf_edge_vertices_.resize(end);
-    leaf_edge_ratios_.resize(end);
-    leaf_first_triangle_.resize(end);
+    resize_with_room(end, &leaf_edge_vertices_, &leaf_edge_ratios_, &leaf_first_triangle_);
     place_ratios(first, end);
     share_vertices(first, end);
     write_triangles(first, end);
@@ -365,6 +360,13 @@ class SurfaceBuilder {
     v->reserve(needed + needed / 8 + 1024);
   }
 
+  // Each vector resized to `size`, with room to grow (reserve_room).
+  template <class... V>
+  static void resize_with_room(std::size_t size, V*... vectors) {
+    (reserve_room(vectors, size), ...);
+    (vectors->resize(size), ...);
+  }
+
   // Appends the cubes that emit as leaves: usable, all corners defined, a sign
   // change, and a kept case triangle. Cubes are judged on both cores.
   void select_leaves(const std::vector<std::int32_t>& cubes) {
@@ -404,13 +406,8 @@ class SurfaceBuilder {
       const std::uint32_t kept = masks_[leaf_cube_[l]] & ((1u << table[leaf_case_[l]].triangle_count) - 1);
       total += std::size_t(__builtin_popcount(kept));
     }
-    reserve_room(&triangles_, total);
-    reserve_room(&triangle_leaf_, total);
-    reserve_room(&triangle_slot_, total);
+    resize_with_room(total, &triangles_, &triangle_leaf_, &triangle_slot_);
     reserve_room(&triangle_alive_, total);
-    triangles_.resize(total);
-    triangle_leaf_.resize(total);
-    triangle_slot_.resize(total);
     triangle_alive_.resize(total, 1);
 #pragma omp parallel for schedule(static) num_threads(end - first > 4096 ? threads_ : 1)
     for (std::size_t l = first; l < end; ++l) {
