@@ -86,10 +86,7 @@ void Coarsening::start() {
     for (std::int32_t k = tree_.patches.needs_first[g]; k < tree_.patches.needs_first[g + 1]; ++k)
       groups_[std::size_t(fill[std::size_t(tree_.patches.needs[std::size_t(k)])]++)] = std::int32_t(g);
 
-  std::vector<Triangle> full;
-  for (std::size_t node = 0; node < n; ++node)
-    if (tree_.is_leaf(node)) emit_node(tree_, std::int32_t(node), flags_, &full);
-  full.insert(full.end(), tree_.patches.triangles.begin(), tree_.patches.triangles.end());
+  const std::vector<Triangle> full = full_triangles(tree_);
   topology_.add(full);
   triangles_ = std::int64_t(full.size());
   for (std::size_t node = 0; node < n; ++node)

@@ -155,6 +155,17 @@ void emit_cut(const McOctree& tree, const std::vector<std::uint8_t>& flags, std:
   emit_range(tree, flags, 0, tree.size(), triangles, blocks);
 }
 
+std::vector<Triangle> full_triangles(const McOctree& tree) {
+  std::vector<Triangle> full;
+  full.reserve(tree.triangles.size() + tree.patches.triangles.size());
+  for (std::size_t node = 0; node < tree.size(); ++node)
+    if (tree.is_leaf(node))
+      full.insert(full.end(), tree.triangles.begin() + tree.nodes.first_triangle[node],
+                  tree.triangles.begin() + tree.nodes.first_triangle[node] + tree.nodes.triangle_counts[node]);
+  full.insert(full.end(), tree.patches.triangles.begin(), tree.patches.triangles.end());
+  return full;
+}
+
 void emit_node(const McOctree& tree, std::int32_t node, const std::vector<std::uint8_t>& expanded,
                std::vector<Triangle>* triangles) {
   TransitionInput in;

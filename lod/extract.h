@@ -16,6 +16,10 @@ namespace scan2lod {
 void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority,
                  std::vector<std::uint8_t>* expanded, std::vector<Triangle>* triangles);
 
+// The full mesh's triangles: every leaf's own, then the hole patches (the
+// level at full detail, as a multiset).
+std::vector<Triangle> full_triangles(const McOctree& tree);
+
 // Marks the level after `priority` expansions in `flags` (tree.size(), all
 // zero on entry): 1 for the expanded nodes, 2 for the nodes of the cut below
 // them (the root alone at priority 0).

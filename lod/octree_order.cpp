@@ -1,6 +1,7 @@
 #include "lod/octree_order.h"
 
 #include "lod/coarsening.h"
+#include "lod/extract.h"
 #include "lod/lod_cursor.h"
 #include "measure/topology.h"
 #include "reconstruct/cube_grid.h"
@@ -127,11 +128,7 @@ void count_levels(const McOctree& tree, const LodArray& lod, const MeshTopology&
 void offer_sound_levels_inside_steps(const McOctree& tree, LodArray* lod) {
   TriangleMesh mesh;
   mesh.positions = tree.vertices.positions;
-  for (std::size_t node = 0; node < tree.size(); ++node)
-    if (tree.is_leaf(node))
-      mesh.triangles.insert(mesh.triangles.end(), tree.triangles.begin() + tree.nodes.first_triangle[node],
-                            tree.triangles.begin() + tree.nodes.first_triangle[node] + tree.nodes.triangle_counts[node]);
-  mesh.triangles.insert(mesh.triangles.end(), tree.patches.triangles.begin(), tree.patches.triangles.end());
+  mesh.triangles = full_triangles(tree);
   const MeshTopology full = mesh_topology(mesh);
   // A step's run of priorities not offered is worth counting when the
   // offered levels on either side of it are more than 2 % apart.
