@@ -18,16 +18,13 @@ class Coarsening {
   CoarseningOrder run();
 
  private:
-  enum class Outcome { kCollapsed, kRefused, kWaiting };
   void start();
-  Outcome try_collapse(std::int32_t node, bool closed);
+  bool try_collapse(std::int32_t node);
   void gather_step(std::int32_t node, bool closed);
-  bool neighbours_allow(std::int32_t node);
+  bool neighbours_allow(std::int32_t node) const;
   void gather_change();
   void emit_change(bool expanded);
   void settle(std::int32_t node);  // collapsed or refused: its parent may be ready
-  void wake(std::int32_t node);    // left the expanded set
-  bool release_waiting();
   bool may_expand(std::int32_t node) const;
   bool try_expand(std::int32_t node, bool forced);
   void order_step(std::vector<std::int32_t> nodes, CoarseningOrder* out);
@@ -44,10 +41,6 @@ class Coarsening {
   std::vector<std::int32_t> groups_first_, groups_;  // per node, the patch groups that need it
   std::priority_queue<std::pair<std::int32_t, std::int32_t>> queue_;  // (rank, node)
 
-  // Nodes waiting for a finer neighbour to collapse: (node, next) lists per awaited node.
-  std::vector<std::int32_t> first_waiter_;
-  std::vector<std::pair<std::int32_t, std::int32_t>> waiters_;
-  std::vector<std::int32_t> waiting_;
 
   // The step being tried: its nodes, the cut nodes whose triangles it changes,
   // the patch groups it hides, and the triangles before and after.
@@ -70,7 +63,6 @@ void Coarsening::start() {
   pending_.assign(n, 0);
   mark_.assign(n, 0);
   in_step_.assign(n, 0);
-  first_waiter_.assign(n, -1);
   for (std::size_t node = 0; node < n; ++node) {
     if (tree_.is_leaf(node)) continue;
     flags_[node] = kExpanded;
@@ -120,19 +112,13 @@ void Coarsening::gather_step(std::int32_t node, bool closed) {
 
 // Collapsed, `node` is a cut node on its level: the nodes of its level beside
 // it must not have expanded children (they would be two levels finer).
-bool Coarsening::neighbours_allow(std::int32_t node) {
+bool Coarsening::neighbours_allow(std::int32_t node) const {
   const auto& around = tree_.transitions.neighbours[std::size_t(node)];
   for (int c = 0; c < 27; ++c) {
     const std::int32_t q = around[std::size_t(c)];
     if (c == 13 || q < 0 || !(flags_[std::size_t(q)] & kExpanded)) continue;
-    for (int k = 0; k < tree_.nodes.child_counts[q]; ++k) {
-      const std::int32_t child = tree_.nodes.first_child[q] + k;
-      if (!(flags_[std::size_t(child)] & kExpanded)) continue;
-      // Waits for this one; the others are seen when it has gone.
-      waiters_.push_back({node, first_waiter_[std::size_t(child)]});
-      first_waiter_[std::size_t(child)] = std::int32_t(waiters_.size() - 1);
-      return false;
-    }
+    for (int k = 0; k < tree_.nodes.child_counts[q]; ++k)
+      if (flags_[std::size_t(tree_.nodes.first_child[q] + k)] & kExpanded) return false;
   }
   return true;
 }
@@ -192,9 +178,13 @@ void Coarsening::emit_change(bool expanded) {
   }
 }
 
-Coarsening::Outcome Coarsening::try_collapse(std::int32_t node, bool closed) {
-  if (!closed && !neighbours_allow(node)) return Outcome::kWaiting;
-  gather_step(node, closed);
+// Collapses `node` if the checks allow it: alone with what is under it where
+// the neighbour rule allows that, else together with the finer neighbours the
+// rule ties it to (at its own rank: left until nothing else could move, such
+// steps let coarse nodes of far earlier rank, the bunny's head, collapse
+// first, and its error at 10 k triangles was 2.3 times what it is now).
+bool Coarsening::try_collapse(std::int32_t node) {
+  gather_step(node, !neighbours_allow(node));
   gather_change();
   emit_change(true);
   for (const std::int32_t s : step_) flags_[std::size_t(s)] = 0;
@@ -214,11 +204,10 @@ Coarsening::Outcome Coarsening::try_collapse(std::int32_t node, bool closed) {
     for (const std::int32_t s : step_) {
       const std::int32_t up = tree_.nodes.parents[std::size_t(s)];
       if (s != node && up >= 0 && !in_step_[std::size_t(up)] && !refused_[std::size_t(s)]) settle(s);
-      wake(s);
     }
   }
   for (const std::int32_t s : step_) in_step_[std::size_t(s)] = 0;
-  return kept ? Outcome::kCollapsed : Outcome::kRefused;
+  return kept;
 }
 
 void Coarsening::settle(std::int32_t node) {
@@ -226,62 +215,14 @@ void Coarsening::settle(std::int32_t node) {
   if (up >= 0 && --pending_[std::size_t(up)] == 0) queue_.push({rank_[std::size_t(up)], up});
 }
 
-void Coarsening::wake(std::int32_t node) {
-  for (std::int32_t w = first_waiter_[std::size_t(node)]; w >= 0; w = waiters_[std::size_t(w)].second)
-    queue_.push({rank_[std::size_t(waiters_[std::size_t(w)].first)], waiters_[std::size_t(w)].first});
-  first_waiter_[std::size_t(node)] = -1;
-}
-
-// With nothing left to try, a node still waiting for a neighbour tries to
-// collapse together with what the neighbour rule then requires: the smallest
-// such step first, so that the coarse end keeps fine steps. After one step
-// the queue may move again. A node refused that way is left to its parent.
-// False when nothing changed.
-bool Coarsening::release_waiting() {
-  std::vector<std::pair<std::size_t, std::int32_t>> candidates;  // (step size, node)
-  for (const std::int32_t node : waiting_)
-    if ((flags_[std::size_t(node)] & kExpanded) && !refused_[std::size_t(node)] && pending_[std::size_t(node)] == 0 &&
-        !in_step_[std::size_t(node)]) {
-      gather_step(node, true);
-      candidates.push_back({step_.size(), node});
-      for (const std::int32_t s : step_) in_step_[std::size_t(s)] = 0;
-      in_step_[std::size_t(node)] = 1;  // listed once
-    }
-  for (const auto& c : candidates) in_step_[std::size_t(c.second)] = 0;
-  waiting_.clear();
-  std::sort(candidates.begin(), candidates.end(), [&](const auto& a, const auto& b) {
-    return a.first != b.first ? a.first < b.first : rank_[std::size_t(a.second)] > rank_[std::size_t(b.second)];
-  });
-  bool changed = false;
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    const std::int32_t node = candidates[i].second;
-    if (!(flags_[std::size_t(node)] & kExpanded) || refused_[std::size_t(node)] || pending_[std::size_t(node)] != 0) continue;
-    changed = true;
-    if (try_collapse(node, true) == Outcome::kCollapsed) {
-      settle(node);
-      for (std::size_t j = i + 1; j < candidates.size(); ++j) waiting_.push_back(candidates[j].second);
-      break;
-    }
-    refused_[std::size_t(node)] = 1;
-    settle(node);
-  }
-  return changed;
-}
-
 CoarseningOrder Coarsening::run() {
   start();
-  for (;;) {
-    while (!queue_.empty()) {
-      const std::int32_t node = queue_.top().second;
-      queue_.pop();
-      if (!(flags_[std::size_t(node)] & kExpanded) || refused_[std::size_t(node)] || pending_[std::size_t(node)] != 0) continue;
-      switch (try_collapse(node, false)) {
-        case Outcome::kCollapsed: settle(node); break;
-        case Outcome::kRefused: refused_[std::size_t(node)] = 1, settle(node); break;
-        case Outcome::kWaiting: waiting_.push_back(node); break;
-      }
-    }
-    if (!release_waiting()) break;
+  while (!queue_.empty()) {
+    const std::int32_t node = queue_.top().second;
+    queue_.pop();
+    if (!(flags_[std::size_t(node)] & kExpanded) || refused_[std::size_t(node)] || pending_[std::size_t(node)] != 0) continue;
+    if (!try_collapse(node)) refused_[std::size_t(node)] = 1;
+    settle(node);
   }
   return replay();
 }
