@@ -10,8 +10,6 @@
 namespace scan2lod {
 namespace {
 
-constexpr std::uint8_t kExpanded = 1;
-
 class Coarsening {
  public:
   Coarsening(const McOctree& tree, const std::vector<std::int32_t>& rank);
@@ -36,7 +34,7 @@ class Coarsening {
   const std::vector<std::int32_t>& rank_;
   LevelTopology topology_;
 
-  std::vector<std::uint8_t> flags_;        // bit 0 expanded (extract.h's)
+  std::vector<std::uint8_t> flags_;        // kExpanded (extract.h)
   std::vector<std::uint8_t> refused_;      // expanded for good, unless the parent takes it along
   std::vector<std::int32_t> pending_;      // children expanded and not refused
   std::vector<std::int32_t> missing_;      // per patch group: needs not expanded
@@ -194,7 +192,7 @@ void Coarsening::emit_change(bool expanded) {
 // the neighbour rule allows that, else together with the finer neighbours the
 // rule ties it to (at its own rank: left until nothing else could move, such
 // steps let coarse nodes of far earlier rank, the bunny's head, collapse
-// first, and its error at 10 k triangles was 2.3 times what it is now).
+// first, and its error at 10 k triangles was 2.3 times that of this order).
 bool Coarsening::try_collapse(std::int32_t node) {
   gather_step(node, !neighbours_allow(node));
   gather_change();
@@ -252,10 +250,7 @@ std::int32_t Coarsening::key(std::int32_t node) const {
 
 // The triangles `node`'s expansion adds: its children's less its own, at least 1.
 double Coarsening::added_triangles(std::int32_t node) const {
-  int children = 0;
-  for (int c = 0; c < tree_.nodes.child_counts[std::size_t(node)]; ++c)
-    children += tree_.nodes.triangle_counts[std::size_t(tree_.nodes.first_child[std::size_t(node)] + c)];
-  return double(std::max(1, children - int(tree_.nodes.triangle_counts[std::size_t(node)])));
+  return double(std::max(1, tree_.children_triangles(std::size_t(node)) - int(tree_.nodes.triangle_counts[std::size_t(node)])));
 }
 
 CoarseningOrder Coarsening::run() {

@@ -10,7 +10,7 @@
 // inside such a step are not offered. Collapses also keep the neighbour
 // rule (neighbours differ by at most one level) at every step.
 //
-// Internal to lod/ (lod_array.cpp).
+// Internal to lod/ (octree_order.cpp).
 #pragma once
 
 #include "lod/mc_octree.h"

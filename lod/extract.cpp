@@ -10,7 +10,7 @@ namespace scan2lod {
 namespace {
 
 // Marks in extract_lod's scratch: bit 0 expanded, bit 1 in the cut.
-constexpr std::uint8_t kExpanded = 1, kCut = 2;
+constexpr std::uint8_t kCut = 2;
 constexpr std::uint64_t kCutInEight = 0x0202020202020202ull;  // kCut in each of eight flags
 
 // Levels from this many expansions on are emitted by all cores.

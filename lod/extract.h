@@ -6,9 +6,14 @@
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
 
+#include <cstdint>
 #include <vector>
 
 namespace scan2lod {
+
+// The flag bit that marks a node expanded, in the flags emit_node and
+// mark_cut read.
+constexpr std::uint8_t kExpanded = 1;
 
 // Triangles (indices into tree.vertices.positions) of the mesh after `priority`
 // expansions (0: the root's, lod.full(): the full marching-cubes mesh).

@@ -10,7 +10,7 @@ namespace {
 
 // flags_ bits: emit_node reads bit 0 alone, so bit 1 can mark nodes to re-emit
 // (the values mark_cut writes).
-constexpr std::uint8_t kExpanded = 1, kDirty = 2;
+constexpr std::uint8_t kDirty = 2;
 
 // slot_owner_ beyond block ids.
 constexpr std::int32_t kHole = -1, kInside = -2;

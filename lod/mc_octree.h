@@ -95,11 +95,18 @@ struct McOctree {
 
   std::size_t size() const { return nodes.size(); }
   bool is_leaf(std::size_t n) const { return nodes.first_child[n] < 0; }
+  // The own triangles of node n's children: what the cut holds where n expanded
+  // (transitions aside).
+  int children_triangles(std::size_t n) const {
+    int sum = 0;
+    for (int c = 0; c < nodes.child_counts[n]; ++c) sum += nodes.triangle_counts[std::size_t(nodes.first_child[n] + c)];
+    return sum;
+  }
   std::size_t internal_nodes() const { return transitions.size(); }
   std::size_t patch_groups() const { return patches.groups(); }
 };
 
-// What orders the expansions (lod_array.h numbers nodes by it, largest first).
+// What orders the expansions (number_nodes, lod/octree_order.h, ranks nodes by it, largest first).
 enum class LodMetric {
   // Seed §5.2: the area of the children's triangles minus the node's own.
   // Blind to where the area goes: a curved coarse node whose children add

@@ -106,10 +106,8 @@ void compute_metrics(LodMetric metric, const std::vector<LeafSums>& sums, McOctr
       }
       deviation += std::sqrt(leaf.area * std::max(0.0, squared));
     }
-    int children = 0;
-    for (int c = 0; c < tree->nodes.child_counts[node]; ++c)
-      children += tree->nodes.triangle_counts[std::size_t(tree->nodes.first_child[node] + c)];
-    tree->nodes.metrics[node] = float(deviation / double(std::max(1, children - int(tree->nodes.triangle_counts[node]))));
+    const int added = tree->children_triangles(node) - int(tree->nodes.triangle_counts[node]);
+    tree->nodes.metrics[node] = float(deviation / double(std::max(1, added)));
   }
 }
 

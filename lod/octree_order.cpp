@@ -60,9 +60,7 @@ std::vector<std::int32_t> metric_ranks(const McOctree& tree) {
   // rule allows cut the bunny's error at 80 % of its triangles from 0.042 to
   // 0.009 (1e-3 of the diagonal), and by a quarter at 20 %.
   auto priority = [&](std::int32_t node) {
-    int children = 0;
-    for (int c = 0; c < tree.nodes.child_counts[node]; ++c) children += tree.nodes.triangle_counts[tree.nodes.first_child[node] + c];
-    if (children <= tree.nodes.triangle_counts[node]) return Key{1, 0.f, node};
+    if (tree.children_triangles(std::size_t(node)) <= tree.nodes.triangle_counts[node]) return Key{1, 0.f, node};
     return Key{0, tree.nodes.metrics[node], node};
   };
 

@@ -453,8 +453,7 @@ TriangleMesh open_cut(const LodModel& model, std::int64_t target, std::size_t* p
   std::size_t p = 0;
   for (; p < lod.full() && count < target; ++p) {
     const std::int32_t node = lod.order[p];
-    count -= tree.nodes.triangle_counts[node];
-    for (int c = 0; c < tree.nodes.child_counts[node]; ++c) count += tree.nodes.triangle_counts[tree.nodes.first_child[node] + c];
+    count += tree.children_triangles(std::size_t(node)) - tree.nodes.triangle_counts[node];
   }
   std::vector<std::uint8_t> flags(tree.size(), 0);
   mark_cut(tree, lod, p, flags.data());
