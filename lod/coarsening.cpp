@@ -25,8 +25,14 @@ class Coarsening {
   void settle(std::int32_t node);  // collapsed or refused: its parent may be ready
   std::int32_t key(std::int32_t node) const;
   double added_triangles(std::int32_t node) const;
+  template <class F>
+  void for_each_needed(std::int32_t node, F f) const;
   bool may_expand(std::int32_t node) const;
-  bool try_expand(std::int32_t node, bool forced);
+  std::vector<std::int32_t> with_needs(std::int32_t node, const std::vector<std::int32_t>& remaining);
+  std::vector<std::int32_t> grow_sound_set(const std::vector<std::int32_t>& remaining);
+  void count_missing(const std::vector<std::int32_t>& nodes, int delta);
+  bool try_expand(const std::vector<std::int32_t>& nodes, bool forced);
+  void collapse(const std::vector<std::int32_t>& nodes);
   void order_step(std::vector<std::int32_t> nodes, CoarseningOrder* out);
   CoarseningOrder replay();
 
@@ -48,7 +54,7 @@ class Coarsening {
   // The step being tried: its nodes, the cut nodes whose triangles it changes,
   // the patch groups it hides, and the triangles before and after.
   std::vector<std::int32_t> step_, changed_, hidden_;
-  std::vector<std::uint8_t> mark_, in_step_;
+  std::vector<std::uint8_t> mark_, in_step_, grown_;
   std::vector<Triangle> expanded_, collapsed_;
 
   std::vector<std::int32_t> step_nodes_, step_first_{0};  // accepted steps, in order
@@ -66,6 +72,7 @@ void Coarsening::start() {
   pending_.assign(n, 0);
   mark_.assign(n, 0);
   in_step_.assign(n, 0);
+  grown_.assign(n, 0);
   for (std::size_t node = 0; node < n; ++node) {
     if (tree_.is_leaf(node)) continue;
     flags_[node] = kExpanded;
@@ -205,9 +212,7 @@ bool Coarsening::try_collapse(std::int32_t node) {
     for (const std::int32_t s : step_) flags_[std::size_t(s)] = kExpanded;
   } else {
     topology_.commit();
-    for (const std::int32_t s : step_)
-      for (std::int32_t k = groups_first_[std::size_t(s)]; k < groups_first_[std::size_t(s) + 1]; ++k)
-        ++missing_[std::size_t(groups_[std::size_t(k)])];
+    count_missing(step_, +1);
     step_nodes_.insert(step_nodes_.end(), step_.begin(), step_.end());
     step_first_.push_back(std::int32_t(step_nodes_.size()));
     // The step's other tops (taken for the neighbour rule) leave their parents' wait.
@@ -265,12 +270,14 @@ CoarseningOrder Coarsening::run() {
   return replay();
 }
 
-// Whether `node` may expand now: its parent has, and so has the node above
-// each of its 26 neighbour cells one level up (Lee's neighbour rule).
-bool Coarsening::may_expand(std::int32_t node) const {
+// Calls `f` on what must expand before `node` may: its parent, and the node
+// above each of its 26 neighbour cells one level up (Lee's neighbour rule),
+// where they have not; stops when `f` returns false.
+template <class F>
+void Coarsening::for_each_needed(std::int32_t node, F f) const {
   const std::int32_t up = tree_.nodes.parents[std::size_t(node)];
-  if (up < 0) return true;
-  if (!(flags_[std::size_t(up)] & kExpanded)) return false;
+  if (up < 0) return;
+  if (!(flags_[std::size_t(up)] & kExpanded) && !f(up)) return;
   int x, y, z;
   unpack_key(tree_.nodes.keys[std::size_t(node)], &x, &y, &z);
   const auto& around = tree_.transitions.neighbours[std::size_t(up)];
@@ -278,65 +285,166 @@ bool Coarsening::may_expand(std::int32_t node) const {
     const int cell = (((x + c % 3 - 1) >> 1) - (x >> 1) + 1) + 3 * (((y + c / 3 % 3 - 1) >> 1) - (y >> 1) + 1) +
                      9 * (((z + c / 9 - 1) >> 1) - (z >> 1) + 1);
     const std::int32_t q = around[std::size_t(cell)];
-    if (q >= 0 && !tree_.is_leaf(std::size_t(q)) && !(flags_[std::size_t(q)] & kExpanded)) return false;
+    if (q >= 0 && q != up && !tree_.is_leaf(std::size_t(q)) && !(flags_[std::size_t(q)] & kExpanded) && !f(q)) return;
   }
-  return true;
 }
 
-// Expands `node` if that keeps the level sound, or anyway when `forced`.
-bool Coarsening::try_expand(std::int32_t node, bool forced) {
-  flags_[std::size_t(node)] = kExpanded;
-  for (std::int32_t k = groups_first_[std::size_t(node)]; k < groups_first_[std::size_t(node) + 1]; ++k)
-    --missing_[std::size_t(groups_[std::size_t(k)])];
-  step_.assign(1, node);
-  in_step_[std::size_t(node)] = 1;
+bool Coarsening::may_expand(std::int32_t node) const {
+  bool may = true;
+  for_each_needed(node, [&](std::int32_t) { return may = false; });
+  return may;
+}
+
+// `node` with all it needs, recursively, each before what needs it (they are
+// a level coarser), all among the `remaining` nodes of the step; empty if
+// something needed is not among them.
+std::vector<std::int32_t> Coarsening::with_needs(std::int32_t node, const std::vector<std::int32_t>& remaining) {
+  for (const std::int32_t q : remaining) mark_[std::size_t(q)] = 4;
+  std::vector<std::int32_t> set{node};
+  mark_[std::size_t(node)] = 8;
+  bool complete = true;
+  for (std::size_t i = 0; i < set.size() && complete; ++i)
+    for_each_needed(set[i], [&](std::int32_t q) {
+      if (mark_[std::size_t(q)] == 4) {
+        mark_[std::size_t(q)] = 8;
+        set.push_back(q);
+      }
+      return complete = mark_[std::size_t(q)] == 8;
+    });
+  for (const std::int32_t q : remaining) mark_[std::size_t(q)] = 0;
+  if (!complete) return {};
+  std::sort(set.begin(), set.end(), [&](std::int32_t a, std::int32_t b) {
+    return tree_.nodes.levels[std::size_t(a)] < tree_.nodes.levels[std::size_t(b)];
+  });
+  return set;
+}
+
+// The patch groups that need `nodes` miss `delta` more of them each.
+void Coarsening::count_missing(const std::vector<std::int32_t>& nodes, int delta) {
+  for (const std::int32_t node : nodes)
+    for (std::int32_t k = groups_first_[std::size_t(node)]; k < groups_first_[std::size_t(node) + 1]; ++k)
+      missing_[std::size_t(groups_[std::size_t(k)])] += delta;
+}
+
+// Expands `nodes` together if that keeps the level sound, or anyway when
+// `forced`.
+bool Coarsening::try_expand(const std::vector<std::int32_t>& nodes, bool forced) {
+  auto set_flags = [&](std::uint8_t f) {
+    for (const std::int32_t node : nodes) flags_[std::size_t(node)] = f;
+  };
+  set_flags(kExpanded);
+  count_missing(nodes, -1);
+  step_ = nodes;
+  for (const std::int32_t node : nodes) in_step_[std::size_t(node)] = 1;
   gather_change();
   emit_change(true);
-  flags_[std::size_t(node)] = 0;
+  set_flags(0);
   emit_change(false);
   const bool kept = forced || topology_.keeps_topology(collapsed_, expanded_);
   if (kept) {
-    flags_[std::size_t(node)] = kExpanded;
+    set_flags(kExpanded);
     if (forced)
       topology_.replace(collapsed_, expanded_);
     else
       topology_.commit();
     triangles_ += std::int64_t(expanded_.size()) - std::int64_t(collapsed_.size());
   } else {
-    for (std::int32_t k = groups_first_[std::size_t(node)]; k < groups_first_[std::size_t(node) + 1]; ++k)
-      ++missing_[std::size_t(groups_[std::size_t(k)])];
+    count_missing(nodes, +1);
   }
-  in_step_[std::size_t(node)] = 0;
+  for (const std::int32_t node : nodes) in_step_[std::size_t(node)] = 0;
   return kept;
 }
 
+// Collapses `nodes` unchecked: all expanded, each one's parent among them
+// but the root's.
+void Coarsening::collapse(const std::vector<std::int32_t>& nodes) {
+  step_ = nodes;
+  for (const std::int32_t node : nodes) in_step_[std::size_t(node)] = 1;
+  gather_change();
+  emit_change(true);
+  for (const std::int32_t node : nodes) flags_[std::size_t(node)] = 0;
+  count_missing(nodes, +1);
+  emit_change(false);
+  topology_.replace(expanded_, collapsed_);
+  triangles_ += std::int64_t(collapsed_.size()) - std::int64_t(expanded_.size());
+  for (const std::int32_t node : nodes) in_step_[std::size_t(node)] = 0;
+}
+
+// A set of the step's `remaining` nodes whose expansion together keeps the
+// level sound, with all they need, short of the whole; empty if none is
+// found. Grown one node (with what it needs) at a time, the deepest first: a
+// thin part's deepest nodes with their needs may still float free (the
+// bunny's ear), and the coarser nodes around them join them to the rest.
+std::vector<std::int32_t> Coarsening::grow_sound_set(const std::vector<std::int32_t>& remaining) {
+  std::vector<std::int32_t> seeds = remaining, set;
+  auto deeper = [&](std::int32_t a, std::int32_t b) {
+    return tree_.nodes.levels[std::size_t(a)] > tree_.nodes.levels[std::size_t(b)];
+  };
+  std::stable_sort(seeds.begin(), seeds.end(), deeper);
+  bool found = false;
+  for (const std::int32_t seed : seeds) {
+    if (grown_[std::size_t(seed)]) continue;
+    for (const std::int32_t q : with_needs(seed, remaining))
+      if (!grown_[std::size_t(q)]) {
+        grown_[std::size_t(q)] = 1;
+        set.push_back(q);
+      }
+    if (set.size() == remaining.size()) break;
+    std::stable_sort(set.begin(), set.end(), [&](std::int32_t a, std::int32_t b) { return deeper(b, a); });
+    if ((found = try_expand(set, false))) break;
+  }
+  for (const std::int32_t q : remaining) grown_[std::size_t(q)] = 0;
+  if (!found) set.clear();
+  return set;
+}
+
 // The nodes of one step in an order whose prefixes stay sound as long as
-// they can: each time, the first of the nodes that may expand (by rank) whose
-// expansion keeps the level sound, else the first of them, after which the
+// they can. Each time: the first node by rank that may expand and whose
+// expansion keeps the level sound; else the first whose expansion together
+// with all it needs does; else a set grown from the deepest nodes
+// (grow_sound_set); else the first node that may expand, after which the
 // rest of the step's prefixes are not offered.
 void Coarsening::order_step(std::vector<std::int32_t> nodes, CoarseningOrder* out) {
   std::sort(nodes.begin(), nodes.end(),
             [&](std::int32_t a, std::int32_t b) { return rank_[std::size_t(a)] < rank_[std::size_t(b)]; });
   bool sound = true;
-  while (!nodes.empty()) {
-    std::size_t chosen = nodes.size();
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
-      if (!may_expand(nodes[i])) continue;
-      if (chosen == nodes.size()) chosen = i;
-      if (sound && try_expand(nodes[i], false)) {
-        chosen = i;
-        break;
-      }
-      if (!sound) break;
+  auto take = [&](const std::vector<std::int32_t>& set) {
+    for (const std::int32_t node : set) {
+      out->order.push_back(node);
+      nodes.erase(std::find(nodes.begin(), nodes.end(), node));
+      if (node != set.back() || (!sound && !nodes.empty()))
+        out->inside_steps.push_back(std::int32_t(out->order.size()));
     }
-    if (chosen == nodes.size()) chosen = 0;  // cannot happen: a balanced step's parents come first
-    if (!(flags_[std::size_t(nodes[chosen])] & kExpanded)) {
-      try_expand(nodes[chosen], true);
+  };
+  while (!nodes.empty()) {
+    std::vector<std::int32_t> chosen;
+    if (sound)
+      for (const std::int32_t node : nodes)
+        if (may_expand(node) && try_expand({node}, false)) {
+          chosen.assign(1, node);
+          break;
+        }
+    if (sound && chosen.empty())
+      for (const std::int32_t node : nodes) {
+        if (may_expand(node)) continue;
+        std::vector<std::int32_t> set = with_needs(node, nodes);
+        if (!set.empty() && try_expand(set, false)) {
+          chosen = std::move(set);
+          break;
+        }
+      }
+    if (sound && chosen.empty()) chosen = grow_sound_set(nodes);
+    if (chosen.empty()) {
+      for (const std::int32_t node : nodes)
+        if (may_expand(node)) {
+          chosen.assign(1, node);
+          break;
+        }
+      if (chosen.empty()) chosen.assign(1, nodes.front());  // cannot happen: a balanced step's parents come first
+      try_expand(chosen, true);
       sound = false;
     }
-    out->order.push_back(nodes[chosen]);
-    nodes.erase(nodes.begin() + std::ptrdiff_t(chosen));
-    if (!sound && !nodes.empty()) out->inside_steps.push_back(std::int32_t(out->order.size()));
+    take(chosen);
   }
 }
 
@@ -347,9 +455,20 @@ void Coarsening::order_step(std::vector<std::int32_t> nodes, CoarseningOrder* ou
 CoarseningOrder Coarsening::replay() {
   constexpr std::int64_t kReorderedUpTo = 25000;  // triangles
   CoarseningOrder out;
+  std::vector<std::int32_t> coarsest;
   for (std::size_t node = 0; node < tree_.size(); ++node)
-    if (flags_[node] & kExpanded) out.order.push_back(std::int32_t(node));
-  out.coarsest = out.order.size();
+    if (flags_[node] & kExpanded) coarsest.push_back(std::int32_t(node));
+  out.coarsest = coarsest.size();
+  if (triangles_ <= kReorderedUpTo && coarsest.size() > 1) {
+    // From the root's level, which the checks have not seen: its prefixes are
+    // all counted whole (lod/octree_order.cpp), none offered here.
+    collapse(coarsest);
+    CoarseningOrder chunk;
+    order_step(std::move(coarsest), &chunk);
+    out.order = std::move(chunk.order);
+  } else {
+    out.order = std::move(coarsest);
+  }
   for (std::int32_t p = 0; p < std::int32_t(out.coarsest); ++p) out.inside_steps.push_back(p);
   for (std::size_t s = step_first_.size() - 1; s-- > 0;) {
     const std::int32_t first = std::int32_t(out.order.size());
@@ -358,7 +477,7 @@ CoarseningOrder Coarsening::replay() {
       out.order.insert(out.order.end(), nodes.begin(), nodes.end());
       for (std::int32_t p = first + 1; p < std::int32_t(out.order.size()); ++p) out.inside_steps.push_back(p);
     } else if (nodes.size() == 1) {
-      try_expand(nodes.front(), true);
+      try_expand({nodes.front()}, true);
       out.order.push_back(nodes.front());
     } else {
       order_step(std::move(nodes), &out);

@@ -6,9 +6,12 @@
 // A node whose collapse is refused stays expanded, and its parent may then
 // collapse the two together, in one step: a rim then coarsens with a node
 // large enough to carry it, and a thin part (an ear) goes only with a node
-// that holds all of it, never leaving a piece behind. The priority numbers
-// inside such a step are not offered. Collapses also keep the neighbour
-// rule (neighbours differ by at most one level) at every step.
+// that holds all of it, never leaving a piece behind. Inside such a step,
+// replayed forwards, only the prefixes the checks pass are offered: a node, or
+// a set of its nodes with all they need (one ear of two). The nodes no
+// collapse could take off are replayed the same way from the root's level.
+// Collapses also keep the neighbour rule (neighbours differ by at most one
+// level) at every step.
 //
 // Internal to lod/ (octree_order.cpp).
 #pragma once
