@@ -222,6 +222,14 @@ bool LevelTopology::keeps_topology(const std::vector<Triangle>& removed, const s
   return kept;
 }
 
+bool sound_level(const MeshTopology& level, const MeshTopology& full) {
+  auto twice_genus = [](const MeshTopology& m) {
+    return 2 * long(m.components) - long(m.boundary_loops) - m.euler_characteristic;
+  };
+  return level.non_manifold_edges == 0 && level.boundary_loops <= full.boundary_loops &&
+         level.components <= full.components && twice_genus(level) <= twice_genus(full);
+}
+
 void LevelTopology::commit() {
   for (const EdgeUse& e : edges_)
     if (e.added != e.removed) change_edge(e.slot, e.added - e.removed);

@@ -22,12 +22,19 @@
 #pragma once
 
 #include "core/types.h"
+#include "measure/topology.h"
 
 #include <cstdint>
 #include <utility>
 #include <vector>
 
 namespace scan2lod {
+
+// Whether a level counted whole (measure/topology.h) is sound against the
+// full mesh: no non-manifold edge, no more boundary loops, no more
+// components, and no more handles (2 genus = 2 components - loops - χ, for
+// orientable surfaces): the rules above, for the whole level.
+bool sound_level(const MeshTopology& level, const MeshTopology& full);
 
 class LevelTopology {
  public:

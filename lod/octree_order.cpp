@@ -2,6 +2,7 @@
 
 #include "lod/coarsening.h"
 #include "lod/extract.h"
+#include "lod/level_topology.h"
 #include "lod/lod_cursor.h"
 #include "measure/topology.h"
 #include "reconstruct/cube_grid.h"
@@ -118,8 +119,7 @@ void count_levels(const McOctree& tree, const LodArray& lod, const MeshTopology&
   for (std::size_t i = begin; i < end; ++i) {
     cursor.move_to(std::size_t(priorities[i]));
     cursor.live_triangles(&level.triangles);
-    const MeshTopology t = mesh_topology(level);
-    sound[i] = t.non_manifold_edges == 0 && t.boundary_loops <= full.boundary_loops && t.components <= full.components;
+    sound[i] = sound_level(mesh_topology(level), full);
   }
 }
 
