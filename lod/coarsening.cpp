@@ -19,7 +19,7 @@ constexpr std::int64_t kCountedWholeUpTo = 5000;
 
 class Coarsening {
  public:
-  Coarsening(const McOctree& tree, const std::vector<std::int32_t>& rank);
+  Coarsening(const McOctree& tree, const std::vector<std::int32_t>& rank, const MeshTopology& full);
   CoarseningOrder run();
 
  private:
@@ -46,6 +46,7 @@ class Coarsening {
 
   const McOctree& tree_;
   const std::vector<std::int32_t>& rank_;
+  const MeshTopology& full_;
   LevelTopology topology_;
 
   std::vector<std::uint8_t> flags_;        // kExpanded (extract.h)
@@ -67,15 +68,14 @@ class Coarsening {
 
   std::vector<std::int32_t> step_nodes_, step_first_{0};  // accepted steps, in order
   std::int64_t triangles_ = 0;  // in the current level
-  // For level_sound: the full mesh's counts, and scratch (a vertex's index
-  // in level_, else -1).
-  MeshTopology full_;
-  std::vector<std::int32_t> compact_;
+  // For level_sound, scratch: a vertex's index in level_ (else -1), the
+  // nodes to visit, the vertices given an index.
+  std::vector<std::int32_t> compact_, visit_, compacted_;
   TriangleMesh level_;
 };
 
-Coarsening::Coarsening(const McOctree& tree, const std::vector<std::int32_t>& rank)
-    : tree_(tree), rank_(rank), topology_(tree.vertices.size(), tree.triangles.size()) {}
+Coarsening::Coarsening(const McOctree& tree, const std::vector<std::int32_t>& rank, const MeshTopology& full)
+    : tree_(tree), rank_(rank), full_(full), topology_(tree.vertices.size(), tree.triangles.size()) {}
 
 // The full mesh: every node above the leaves expanded, every patch shown.
 void Coarsening::start() {
@@ -110,13 +110,7 @@ void Coarsening::start() {
 
   const std::vector<Triangle> full = full_triangles(tree_);
   topology_.add(full);
-  {
-    TriangleMesh m;
-    m.positions = tree_.vertices.positions;
-    m.triangles = full;
-    full_ = mesh_topology(m);
-    compact_.assign(tree_.vertices.size(), -1);
-  }
+  compact_.assign(tree_.vertices.size(), -1);
   triangles_ = std::int64_t(full.size());
   for (std::size_t node = 0; node < n; ++node)
     if (flags_[node] && pending_[node] == 0) queue_.push({rank_[node], std::int32_t(node)});
@@ -343,12 +337,12 @@ std::vector<std::int32_t> Coarsening::with_needs(std::int32_t node, const std::v
 // its own vertices.
 bool Coarsening::level_sound() {
   level_.triangles.clear();
-  std::vector<std::int32_t> stack{0};
-  while (!stack.empty()) {
-    const std::int32_t q = stack.back();
-    stack.pop_back();
+  visit_.assign(1, 0);
+  while (!visit_.empty()) {
+    const std::int32_t q = visit_.back();
+    visit_.pop_back();
     if (flags_[std::size_t(q)] & kExpanded) {
-      for (int c = 0; c < tree_.nodes.child_counts[q]; ++c) stack.push_back(tree_.nodes.first_child[q] + c);
+      for (int c = 0; c < tree_.nodes.child_counts[q]; ++c) visit_.push_back(tree_.nodes.first_child[q] + c);
     } else {
       emit_node(tree_, q, flags_, &level_.triangles);
     }
@@ -358,17 +352,17 @@ bool Coarsening::level_sound() {
       level_.triangles.insert(level_.triangles.end(), tree_.patches.triangles.begin() + tree_.patches.group_first[g],
                               tree_.patches.triangles.begin() + tree_.patches.group_first[g + 1]);
   level_.positions.clear();
-  std::vector<std::int32_t> used;
+  compacted_.clear();
   for (Triangle& t : level_.triangles)
     for (auto& v : t) {
       if (compact_[std::size_t(v)] < 0) {
         compact_[std::size_t(v)] = std::int32_t(level_.positions.size());
         level_.positions.push_back(tree_.vertices.positions[std::size_t(v)]);
-        used.push_back(v);
+        compacted_.push_back(v);
       }
       v = compact_[std::size_t(v)];
     }
-  for (const std::int32_t v : used) compact_[std::size_t(v)] = -1;
+  for (const std::int32_t v : compacted_) compact_[std::size_t(v)] = -1;
   return sound_level(mesh_topology(level_), full_);
 }
 
@@ -393,19 +387,19 @@ bool Coarsening::try_expand(const std::vector<std::int32_t>& nodes, bool forced)
   emit_change(true);
   set_flags(0);
   emit_change(false);
-  bool kept = forced || topology_.keeps_topology(collapsed_, expanded_);
+  const bool checked = !forced && topology_.keeps_topology(collapsed_, expanded_);
+  bool kept = forced || checked;
   if (!kept && triangles_ - std::int64_t(collapsed_.size()) + std::int64_t(expanded_.size()) <= kCountedWholeUpTo) {
     set_flags(kExpanded);
     kept = level_sound();
     set_flags(0);
-    if (kept) forced = true;
   }
   if (kept) {
     set_flags(kExpanded);
-    if (forced)
-      topology_.replace(collapsed_, expanded_);
-    else
+    if (checked)
       topology_.commit();
+    else
+      topology_.replace(collapsed_, expanded_);
     triangles_ += std::int64_t(expanded_.size()) - std::int64_t(collapsed_.size());
   } else {
     count_missing(nodes, +1);
@@ -547,8 +541,8 @@ CoarseningOrder Coarsening::replay() {
 
 }  // namespace
 
-CoarseningOrder coarsen(const McOctree& tree, const std::vector<std::int32_t>& rank) {
-  return Coarsening(tree, rank).run();
+CoarseningOrder coarsen(const McOctree& tree, const std::vector<std::int32_t>& rank, const MeshTopology& full) {
+  return Coarsening(tree, rank, full).run();
 }
 
 }  // namespace scan2lod

@@ -17,6 +17,7 @@
 #pragma once
 
 #include "lod/mc_octree.h"
+#include "measure/topology.h"
 
 #include <cstdint>
 #include <vector>
@@ -35,6 +36,8 @@ struct CoarseningOrder {
 
 // @param rank  per node, where it would expand by metric alone: nodes
 //              collapse from the largest rank down, as the checks allow.
-CoarseningOrder coarsen(const McOctree& tree, const std::vector<std::int32_t>& rank);
+// @param full  the full mesh's topology (full_triangles), which small levels
+//              counted whole are held to.
+CoarseningOrder coarsen(const McOctree& tree, const std::vector<std::int32_t>& rank, const MeshTopology& full);
 
 }  // namespace scan2lod

@@ -123,11 +123,7 @@ void count_levels(const McOctree& tree, const LodArray& lod, const MeshTopology&
   }
 }
 
-void offer_sound_levels_inside_steps(const McOctree& tree, LodArray* lod) {
-  TriangleMesh mesh;
-  mesh.positions = tree.vertices.positions;
-  mesh.triangles = full_triangles(tree);
-  const MeshTopology full = mesh_topology(mesh);
+void offer_sound_levels_inside_steps(const McOctree& tree, const MeshTopology& full, LodArray* lod) {
   // A step's run of priorities not offered is worth counting when the
   // offered levels on either side of it are more than 2 % apart.
   std::vector<std::int32_t> counted, kept;
@@ -159,12 +155,19 @@ void offer_sound_levels_inside_steps(const McOctree& tree, LodArray* lod) {
 }  // namespace
 
 LodArray number_nodes(const McOctree& tree) {
-  CoarseningOrder coarsening = coarsen(tree, metric_ranks(tree));
+  // What every level is held to.
+  const MeshTopology full = [&] {
+    TriangleMesh mesh;
+    mesh.positions = tree.vertices.positions;
+    mesh.triangles = full_triangles(tree);
+    return mesh_topology(mesh);
+  }();
+  CoarseningOrder coarsening = coarsen(tree, metric_ranks(tree), full);
   LodArray lod;
   lod.order = std::move(coarsening.order);
   lod.inside_steps = std::move(coarsening.inside_steps);
   lod.accumulated = accumulation_table(tree, lod);
-  offer_sound_levels_inside_steps(tree, &lod);
+  offer_sound_levels_inside_steps(tree, full, &lod);
   return lod;
 }
 
