@@ -79,7 +79,7 @@ LevelBegin build_skeleton(const CubeNodes& leaves, McOctree* tree) {
 
 }  // namespace octree_build
 
-McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field,
+McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const MeshField& field,
                          const OctreeOptions& options) {
   using namespace octree_build;
   if (leaves.size() == 0) throw InputError("", "no leaf cube nodes: the reconstruction is empty");
@@ -94,7 +94,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   for (std::size_t l = 0; l < leaves.size(); ++l) leaf_index.insert(leaves.cube_keys[l], std::int32_t(l));
 
   const std::vector<std::uint8_t> dropped = dropped_corners(leaves, mesh);
-  LatticeSigns signs(leaves, field, dropped);
+  LatticeSigns signs(leaves, field.distance, dropped);
   const SignHazards hazards(mesh, leaves.patch_triangles);
   TreeSignInference inference(tree, signs, hazards);
   signs.set_inference(std::ref(inference));
@@ -104,6 +104,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   const std::vector<std::uint8_t> cases_are_signs =
       cases_and_triangles(leaves, leaf_index, level_begin, dropped, &signs, &edges, &tree);
   transition_data(level_begin, cases_are_signs, &signs, &edges, &tree);
+  pull_jump_vertices(edges.jumps(), field.closest, &tree);
   const std::vector<LeafSums> sums = leaf_sums(tree, std::size_t(level_begin[tree.depth]));
   compute_metrics(options.metric, sums, &tree);
   added_vertex_attributes(first_added, &tree);
@@ -117,9 +118,10 @@ McOctree build_mc_octree(const Reconstruction& reconstruction, const OctreeOptio
   // second at R = 256: on a second thread it overlaps the octree's skeleton,
   // which needs no field.
   const TriangleMesh& mesh = reconstruction.mesh;
-  std::shared_future<SignedDistanceField> ready =
-      std::async(std::launch::async, [&mesh] { return mesh_distance_field(mesh); }).share();
-  const SignedDistanceField field = [ready](const std::vector<Vec3f>& q, std::vector<float>* d) { ready.get()(q, d); };
+  std::shared_future<MeshField> ready = std::async(std::launch::async, [&mesh] { return mesh_field(mesh); }).share();
+  MeshField field;
+  field.distance = [ready](const std::vector<Vec3f>& q, std::vector<float>* d) { ready.get().distance(q, d); };
+  field.closest = [ready](const std::vector<Vec3f>& q, std::vector<Vec3f>* c) { ready.get().closest(q, c); };
   return build_mc_octree(reconstruction.leaves, mesh, field, options);
 }
 

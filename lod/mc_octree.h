@@ -15,7 +15,10 @@
 // the change, recursively, down to a leaf edge, and uses that leaf's vertex
 // (§5.1: "extending the child edge that holds the crossing"): coarse nodes share
 // the finest mesh's vertices instead of copying them. Only where no leaf has a
-// vertex on that edge is one added, interpolated on the leaf edge.
+// vertex on that edge is one added, interpolated on the leaf edge. Where the
+// field only jumps there (its sign flips beyond an open rim, where no surface
+// is), the added vertex is pulled to the mesh: coarse nodes over a rim then
+// end at the rim instead of reaching out to their cube's faces.
 //
 // The build runs as named phases, one file each; lod/octree_build.h lists them.
 #pragma once
@@ -30,6 +33,8 @@
 #include <vector>
 
 namespace scan2lod {
+
+struct MeshField;  // reconstruct/mesh_field.h
 
 // The nodes, level by level from the root (level 0); a node's children are
 // contiguous and on the next level. Every array has one entry per node.
@@ -126,9 +131,10 @@ struct OctreeOptions {
 // Builds the octree over a reconstruction's leaf cube nodes and mesh.
 // @param[in] leaves  CubeNodes from reconstruct(); resolution a power of two
 // @param[in] mesh    the reconstruction's mesh (its vertices are the leaves')
-// @param[in] field   signed distance for lattice points the leaves lack
+// @param[in] field   signed distance for lattice points the leaves lack, and
+//                    closest points of the surface
 // Throws InputError when there are no leaves.
-McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const SignedDistanceField& field,
+McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, const MeshField& field,
                          const OctreeOptions& options = {});
 
 // The octree of a reconstruction, the field being the signed distance to its

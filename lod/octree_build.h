@@ -8,11 +8,13 @@
 //   4. cases, triangles  each node's marching cube, leaves up (octree_cases.cpp)
 //   5. transitions       boundary signs and crossings refined to the next level,
 //                        and the 26 neighbours (octree_transitions.cpp)
-//   6. metric            the LOD metric from sums over the leaf triangles
+//   6. jump vertices     added vertices where the field's sign flips without a
+//                        surface, pulled to the mesh (octree_jumps.cpp)
+//   7. metric            the LOD metric from sums over the leaf triangles
 //                        (octree_metric.cpp)
-//   7. added vertices    normals and colours for the vertices phase 3 added,
-//   8. patch groups      the leaves' hole patches grouped by hole (octree_patches.cpp)
-//   9. centre vertices   one per internal node for its transition fans, fitted
+//   8. added vertices    normals and colours for the vertices phase 3 added,
+//   9. patch groups      the leaves' hole patches grouped by hole (octree_patches.cpp)
+//  10. centre vertices   one per internal node for its transition fans, fitted
 //                        and unfolded (octree_centres.cpp)
 //
 // Internal to lod/: the build's files include it, and the model file's
@@ -21,6 +23,7 @@
 
 #include "core/flat_hash.h"
 #include "lod/mc_octree.h"
+#include "reconstruct/mesh_field.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -190,6 +193,10 @@ class EdgeResolver {
   void resolve(int level, const std::vector<std::uint64_t>& edges,
                const std::vector<std::pair<std::int32_t, int>>& slots, std::vector<std::int32_t>* out);
 
+  // The added vertices whose leaf edge the field jumps across instead of
+  // passing through zero (phase 6).
+  const std::vector<std::int32_t>& jumps() const { return jumps_; }
+
  private:
   std::int32_t leaf_edge_vertex(std::uint64_t edge) const;
   std::int32_t interpolated_vertex(std::uint64_t edge);
@@ -200,6 +207,7 @@ class EdgeResolver {
   McOctree& tree_;
   FlatHashMap added_on_edge_;       // leaf edge -> vertex added on it
   std::vector<FlatHashMap> memo_;   // per level: edge -> its vertex
+  std::vector<std::int32_t> jumps_;
 };
 
 // ---- 4. cases and triangles (octree_cases.cpp) -----------------------------
@@ -223,7 +231,13 @@ void transition_data(const LevelBegin& level_begin, const std::vector<std::uint8
 // (octree_keys.cpp).
 void find_neighbours(std::int32_t node, McOctree* tree);
 
-// ---- 6. metric (octree_metric.cpp) -----------------------------------------
+// ---- 6. jump vertices (octree_jumps.cpp) -----------------------------------
+
+// Moves each vertex of `jumps` (EdgeResolver::jumps) to within half a leaf
+// cube of its closest point on the mesh.
+void pull_jump_vertices(const std::vector<std::int32_t>& jumps, const ClosestPoints& closest, McOctree* tree);
+
+// ---- 7. metric (octree_metric.cpp) -----------------------------------------
 
 // Sums over the leaf triangles under each node, bottom-up.
 struct LeafSums {
@@ -249,7 +263,7 @@ std::vector<LeafSums> leaf_sums(const McOctree& tree, std::size_t internal);
 // The LOD metric of every node above the leaves (0 for leaves).
 void compute_metrics(LodMetric metric, const std::vector<LeafSums>& sums, McOctree* tree);
 
-// ---- 7. added vertices, 9. centre vertices (octree_centres.cpp) ------------
+// ---- 8. added vertices, 10. centre vertices (octree_centres.cpp) -----------
 
 // Normals and colours of the vertices from `first_added` on: normals from the
 // triangles around them, colours from their neighbours.
@@ -260,7 +274,7 @@ void added_vertex_attributes(std::size_t first_added, McOctree* tree);
 // the leaves' planes below and moved where its fans would fold.
 void centre_vertices(const std::vector<LeafSums>& sums, McOctree* tree);
 
-// ---- 8. patch groups (octree_patches.cpp) ----------------------------------
+// ---- 9. patch groups (octree_patches.cpp) ----------------------------------
 
 // Groups the hole patches by hole (triangles joined by shared edges) and gives
 // each group the parents of the leaves along its rim.

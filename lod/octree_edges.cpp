@@ -27,6 +27,11 @@ std::int32_t EdgeResolver::leaf_edge_vertex(std::uint64_t edge) const {
   return added_on_edge_.find(edge);
 }
 
+// The distance is 1-Lipschitz: where the surface crosses an edge, its ends'
+// distances add up to at most the edge's length. A larger sum is a jump of
+// the sign alone (beyond an open rim, where the pseudo-normal flips).
+constexpr float kJumpFactor = 1.5f;
+
 // A vertex added on a leaf edge no leaf crosses, where the distances at its
 // ends interpolate to zero.
 std::int32_t EdgeResolver::interpolated_vertex(std::uint64_t edge) {
@@ -42,6 +47,7 @@ std::int32_t EdgeResolver::interpolated_vertex(std::uint64_t edge) {
   const std::int32_t v = std::int32_t(tree_.vertices.positions.size());
   tree_.vertices.positions.push_back(p);
   added_on_edge_.insert(edge, v);
+  if (std::fabs(da) + std::fabs(db) > kJumpFactor * float(tree_.grid.cube_size)) jumps_.push_back(v);
   return v;
 }
 

@@ -17,7 +17,7 @@
 
 namespace scan2lod {
 
-SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
+MeshField mesh_field(const TriangleMesh& mesh) {
   namespace o3c = open3d::core;
   struct State {
     open3d::t::geometry::RaycastingScene scene;
@@ -100,7 +100,17 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
     std::vector<float> d(1);
     query({mesh.positions[state->triangles.front()[0]]}, 0, 1, &d);
   }
-  return [query](const std::vector<Vec3f>& q, std::vector<float>* d) {
+  MeshField field;
+  field.closest = [state](const std::vector<Vec3f>& q, std::vector<Vec3f>* closest) {
+    closest->resize(q.size());
+    if (q.empty()) return;
+    o3c::Tensor points_in = o3c::Tensor::Empty({std::int64_t(q.size()), 3}, o3c::Float32);
+    std::memcpy(points_in.GetDataPtr<float>(), q.data(), q.size() * sizeof(Vec3f));
+    auto result = state->scene.ComputeClosestPoints(points_in);
+    const float* c = result.at("points").GetDataPtr<float>();
+    for (std::size_t i = 0; i < q.size(); ++i) (*closest)[i] = Vec3f(c[3 * i], c[3 * i + 1], c[3 * i + 2]);
+  };
+  field.distance = [query](const std::vector<Vec3f>& q, std::vector<float>* d) {
     d->assign(q.size(), 0.f);
     if (q.empty()) return;
     // Open3D splits a query into TBB tasks of 1024 points, so a smaller one
@@ -121,6 +131,7 @@ SignedDistanceField mesh_distance_field(const TriangleMesh& mesh) {
     first.join();
     if (failed) std::rethrow_exception(failed);
   };
+  return field;
 }
 
 }  // namespace scan2lod
