@@ -29,4 +29,21 @@ TriangleMesh compact_mesh(const std::vector<Vec3f>& positions, const std::vector
   return out;
 }
 
+// compact_mesh numbers into a fresh table and then scans it whole, which is
+// sequential and best for a large level; this touches only the entries the
+// triangles use, so that a caller compacting thousands of small levels over
+// one vertex array (one table, reset through `used`) pays for those alone.
+void renumber_used(std::vector<Triangle>* triangles, std::vector<std::int32_t>* remap,
+                   std::vector<std::int32_t>* used) {
+  for (Triangle& t : *triangles)
+    for (std::int32_t& i : t) {
+      std::int32_t& r = (*remap)[std::size_t(i)];
+      if (r < 0) {
+        r = std::int32_t(used->size());
+        used->push_back(i);
+      }
+      i = r;
+    }
+}
+
 }  // namespace scan2lod

@@ -16,4 +16,12 @@ namespace scan2lod {
 TriangleMesh compact_mesh(const std::vector<Vec3f>& positions, const std::vector<Vec3f>& normals,
                           const std::vector<Rgb>& colors, const std::vector<std::vector<Triangle>*>& lists);
 
+// The numbering compact_mesh uses, for callers that compact many times over
+// one vertex array: rewrites `triangles` to new ids in first-use order, from
+// used->size() on, and appends each newly used vertex's old id to `used`.
+// `remap` has an entry per vertex, -1 where not used yet; the caller resets
+// the entries `used` names once done with it.
+void renumber_used(std::vector<Triangle>* triangles, std::vector<std::int32_t>* remap,
+                   std::vector<std::int32_t>* used);
+
 }  // namespace scan2lod

@@ -1,5 +1,6 @@
 #include "lod/coarsening.h"
 
+#include "core/compact_mesh.h"
 #include "lod/extract.h"
 #include "lod/level_topology.h"
 #include "reconstruct/cube_grid.h"
@@ -351,18 +352,13 @@ bool Coarsening::level_sound() {
     if (missing_[g] == 0)
       level_.triangles.insert(level_.triangles.end(), tree_.patches.triangles.begin() + tree_.patches.group_first[g],
                               tree_.patches.triangles.begin() + tree_.patches.group_first[g + 1]);
-  level_.positions.clear();
   compacted_.clear();
-  for (Triangle& t : level_.triangles)
-    for (auto& v : t) {
-      if (compact_[std::size_t(v)] < 0) {
-        compact_[std::size_t(v)] = std::int32_t(level_.positions.size());
-        level_.positions.push_back(tree_.vertices.positions[std::size_t(v)]);
-        compacted_.push_back(v);
-      }
-      v = compact_[std::size_t(v)];
-    }
-  for (const std::int32_t v : compacted_) compact_[std::size_t(v)] = -1;
+  renumber_used(&level_.triangles, &compact_, &compacted_);
+  level_.positions.clear();
+  for (const std::int32_t v : compacted_) {
+    level_.positions.push_back(tree_.vertices.positions[std::size_t(v)]);
+    compact_[std::size_t(v)] = -1;
+  }
   return sound_level(mesh_topology(level_), full_);
 }
 

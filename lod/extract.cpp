@@ -1,5 +1,7 @@
 #include "lod/extract.h"
 
+#include "core/compact_mesh.h"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -291,23 +293,10 @@ void extract_lod(const McOctree& tree, const LodArray& lod, std::size_t priority
 }
 
 TriangleMesh compact_lod(const McOctree& tree, const std::vector<Triangle>& triangles) {
-  TriangleMesh mesh;
-  std::vector<std::int32_t> remap(tree.vertices.positions.size(), -1);
-  mesh.triangles.reserve(triangles.size());
-  for (const Triangle& t : triangles) {
-    Triangle out;
-    for (int k = 0; k < 3; ++k) {
-      std::int32_t& r = remap[t[k]];
-      if (r < 0) {
-        r = std::int32_t(mesh.positions.size());
-        mesh.positions.push_back(tree.vertices.positions[t[k]]);
-        if (!tree.vertices.normals.empty()) mesh.normals.push_back(tree.vertices.normals[t[k]]);
-        if (!tree.vertices.colors.empty()) mesh.colors.push_back(tree.vertices.colors[t[k]]);
-      }
-      out[k] = r;
-    }
-    mesh.triangles.push_back(out);
-  }
+  std::vector<Triangle> out = triangles;
+  const VertexArray& v = tree.vertices;
+  TriangleMesh mesh = compact_mesh(v.positions, v.normals, v.colors, {&out});
+  mesh.triangles = std::move(out);
   return mesh;
 }
 
