@@ -61,12 +61,18 @@ MeshField mesh_field(const TriangleMesh& mesh) {
     for (int k = 0; k < 3; ++k) idx[3 * t + k] = std::uint32_t(state->triangles[t][k]);
   state->scene.AddTriangles(vertices, indices);
 
-  // Distances of q[begin, end) into d[begin, end).
-  auto query = [state](const std::vector<Vec3f>& q, std::size_t begin, std::size_t end, std::vector<float>* d) {
+  // Open3D's closest points (and their triangles) of q[begin, end).
+  auto closest_of = [state](const std::vector<Vec3f>& q, std::size_t begin, std::size_t end) {
     const std::int64_t count = std::int64_t(end - begin);
     o3c::Tensor points_in = o3c::Tensor::Empty({count, 3}, o3c::Float32);
     std::memcpy(points_in.GetDataPtr<float>(), q.data() + begin, std::size_t(count) * sizeof(Vec3f));
-    auto result = state->scene.ComputeClosestPoints(points_in);
+    return state->scene.ComputeClosestPoints(points_in);
+  };
+  // Distances of q[begin, end) into d[begin, end).
+  auto query = [state, closest_of](const std::vector<Vec3f>& q, std::size_t begin, std::size_t end,
+                                   std::vector<float>* d) {
+    const std::int64_t count = std::int64_t(end - begin);
+    auto result = closest_of(q, begin, end);
     const float* points = result.at("points").GetDataPtr<float>();
     const auto* prim = result.at("primitive_ids").GetDataPtr<std::uint32_t>();
     const float* uv = result.at("primitive_uvs").GetDataPtr<float>();
@@ -101,12 +107,10 @@ MeshField mesh_field(const TriangleMesh& mesh) {
     query({mesh.positions[state->triangles.front()[0]]}, 0, 1, &d);
   }
   MeshField field;
-  field.closest = [state](const std::vector<Vec3f>& q, std::vector<Vec3f>* closest) {
+  field.closest = [closest_of](const std::vector<Vec3f>& q, std::vector<Vec3f>* closest) {
     closest->resize(q.size());
     if (q.empty()) return;
-    o3c::Tensor points_in = o3c::Tensor::Empty({std::int64_t(q.size()), 3}, o3c::Float32);
-    std::memcpy(points_in.GetDataPtr<float>(), q.data(), q.size() * sizeof(Vec3f));
-    auto result = state->scene.ComputeClosestPoints(points_in);
+    const auto result = closest_of(q, 0, q.size());
     const float* c = result.at("points").GetDataPtr<float>();
     for (std::size_t i = 0; i < q.size(); ++i) (*closest)[i] = Vec3f(c[3 * i], c[3 * i + 1], c[3 * i + 2]);
   };
