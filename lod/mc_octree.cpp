@@ -105,9 +105,10 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
       cases_and_triangles(leaves, leaf_index, level_begin, dropped, &signs, &edges, &tree);
   transition_data(level_begin, cases_are_signs, &signs, &edges, &tree);
   pull_jump_vertices(edges.jumps(), field.closest, &tree);
+  added_vertex_attributes(first_added, &tree);
+  level_vertices(mesh, level_begin, &tree);
   const std::vector<LeafSums> sums = leaf_sums(tree, std::size_t(level_begin[tree.depth]));
   compute_metrics(options.metric, sums, &tree);
-  added_vertex_attributes(first_added, &tree);
   group_patches(leaves.patch_triangles, &tree);
   centre_vertices(sums, &tree);
   return tree;

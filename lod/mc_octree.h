@@ -13,9 +13,11 @@
 //
 // Edge vertices. A coarse edge whose end signs differ takes the half that holds
 // the change, recursively, down to a leaf edge, and uses that leaf's vertex
-// (§5.1: "extending the child edge that holds the crossing"): coarse nodes share
-// the finest mesh's vertices instead of copying them. Only where no leaf has a
-// vertex on that edge is one added, interpolated on the leaf edge. Where the
+// (§5.1: "extending the child edge that holds the crossing"). Each level then
+// gets its own copy of it, moved off the surface by the mesh's tangent planes
+// around it, so that a coarse node's triangles straddle the surface rather
+// than cut under it as chords. Only where no leaf has a vertex on that edge is
+// one added, interpolated on the leaf edge, and shared by the levels. Where the
 // field only jumps there (its sign flips beyond an open rim, where no surface
 // is), the added vertex is pulled to the mesh: coarse nodes over a rim then
 // end at the rim instead of reaching out to their cube's faces.
@@ -77,7 +79,8 @@ struct OctreePatches {
 
 // Positions, normals and colours every level of every LOD structure indexes
 // (lod/lod_model.h). The octree's: the full mesh's vertices first, then the
-// ones it adds (on edges no leaf crosses, and the centres).
+// ones it adds (on edges no leaf crosses, each level's own copies of the mesh
+// vertices its edges resolve to, and the centres).
 struct VertexArray {
   std::vector<Vec3f> positions;
   std::vector<Vec3f> normals;  // empty or one per position
@@ -97,6 +100,10 @@ struct McOctree {
   // leaves these empty (model_from_octree).
   VertexArray vertices;
   std::size_t mesh_vertices = 0;  // the full mesh's vertices: the first of the shared array
+  // Where the levels' own copies of mesh vertices begin (build_mc_octree; the
+  // vertices added on edges lie between mesh_vertices and here, the centres
+  // after the copies). Only the build sets it: a model file does not keep it.
+  std::size_t level_vertices_first = 0;
 
   std::size_t size() const { return nodes.size(); }
   bool is_leaf(std::size_t n) const { return nodes.first_child[n] < 0; }

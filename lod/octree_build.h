@@ -10,11 +10,14 @@
 //                        and the 26 neighbours (octree_transitions.cpp)
 //   6. jump vertices     added vertices where the field's sign flips without a
 //                        surface, pulled to the mesh (octree_jumps.cpp)
-//   7. metric            the LOD metric from sums over the leaf triangles
+//   7. added vertices    normals and colours for the vertices phase 3 added
+//                        (octree_centres.cpp)
+//   8. level vertices    each level's own copies of its crossings, placed by
+//                        the mesh's tangent planes (octree_level_vertices.cpp)
+//   9. metric            the LOD metric from sums over the leaf triangles
 //                        (octree_metric.cpp)
-//   8. added vertices    normals and colours for the vertices phase 3 added,
-//   9. patch groups      the leaves' hole patches grouped by hole (octree_patches.cpp)
-//  10. centre vertices   one per internal node for its transition fans, fitted
+//  10. patch groups      the leaves' hole patches grouped by hole (octree_patches.cpp)
+//  11. centre vertices   one per internal node for its transition fans, fitted
 //                        and unfolded (octree_centres.cpp)
 //
 // Internal to lod/: the build's files include it, and the model file's
@@ -237,7 +240,21 @@ void find_neighbours(std::int32_t node, McOctree* tree);
 // cube of its closest point on the mesh.
 void pull_jump_vertices(const std::vector<std::int32_t>& jumps, const ClosestPoints& closest, McOctree* tree);
 
-// ---- 7. metric (octree_metric.cpp) -----------------------------------------
+// ---- 7. added vertices (octree_centres.cpp) --------------------------------
+
+// Normals and colours of the vertices from `first_added` on: normals from the
+// triangles around them, colours from their neighbours.
+void added_vertex_attributes(std::size_t first_added, McOctree* tree);
+
+// ---- 8. level vertices (octree_level_vertices.cpp) -------------------------
+
+// Gives each level above the leaves its own copy of every mesh vertex its
+// edges resolve to, placed by the mesh's tangent planes around it, and points
+// the level's edges, sub-edges (of the level above) and own triangles at the
+// copies. Their normals and colours are the copied vertex's.
+void level_vertices(const TriangleMesh& mesh, const LevelBegin& level_begin, McOctree* tree);
+
+// ---- 9. metric (octree_metric.cpp) -----------------------------------------
 
 // Sums over the leaf triangles under each node, bottom-up.
 struct LeafSums {
@@ -263,22 +280,18 @@ std::vector<LeafSums> leaf_sums(const McOctree& tree, std::size_t internal);
 // The LOD metric of every node above the leaves (0 for leaves).
 void compute_metrics(LodMetric metric, const std::vector<LeafSums>& sums, McOctree* tree);
 
-// ---- 8. added vertices, 10. centre vertices (octree_centres.cpp) -----------
+// ---- 10. patch groups (octree_patches.cpp) ---------------------------------
 
-// Normals and colours of the vertices from `first_added` on: normals from the
-// triangles around them, colours from their neighbours.
-void added_vertex_attributes(std::size_t first_added, McOctree* tree);
+// Groups the hole patches by hole (triangles joined by shared edges) and gives
+// each group the parents of the leaves along its rim.
+void group_patches(const std::vector<Triangle>& patches, McOctree* tree);
+
+// ---- 11. centre vertices (octree_centres.cpp) ------------------------------
 
 // One centre vertex per node above the leaves, for its transition fans: the
 // mean of its own crossings (of its boundary's where it has none), fitted to
 // the leaves' planes below and moved where its fans would fold.
 void centre_vertices(const std::vector<LeafSums>& sums, McOctree* tree);
-
-// ---- 9. patch groups (octree_patches.cpp) ----------------------------------
-
-// Groups the hole patches by hole (triangles joined by shared edges) and gives
-// each group the parents of the leaves along its rim.
-void group_patches(const std::vector<Triangle>& patches, McOctree* tree);
 
 }  // namespace octree_build
 }  // namespace scan2lod

@@ -1,4 +1,4 @@
-// Phases 8 and 10 of build_mc_octree: attributes of the vertices the octree
+// Phases 7 and 11 of build_mc_octree: attributes of the vertices the octree
 // adds, and the centre vertices of the transition fans (lod/octree_build.h).
 #include "lod/octree_build.h"
 #include "lod/transition.h"
@@ -11,7 +11,7 @@
 namespace scan2lod {
 namespace octree_build {
 
-// Phase 8.
+// Phase 7.
 void added_vertex_attributes(std::size_t first_new_vertex, McOctree* tree) {
   const std::size_t total = tree->vertices.positions.size();
   if (total > first_new_vertex) {

@@ -1,4 +1,4 @@
-// Phase 7 of build_mc_octree: the LOD metric (lod/octree_build.h).
+// Phase 9 of build_mc_octree: the LOD metric (lod/octree_build.h).
 #include "lod/octree_build.h"
 
 #include <Eigen/Eigenvalues>

@@ -1,4 +1,4 @@
-// Phase 9 of build_mc_octree: the leaves' hole patches, grouped by hole
+// Phase 10 of build_mc_octree: the leaves' hole patches, grouped by hole
 // (lod/octree_build.h).
 #include "core/mesh_edges.h"
 #include "lod/octree_build.h"

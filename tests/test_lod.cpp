@@ -72,22 +72,6 @@ TEST(McOctree, FullDetailIsTheMarchingCubesMesh) {
     ASSERT_EQ(m.tree.vertices.positions[v], m.reconstruction.mesh.positions[v]);
 }
 
-TEST(McOctree, ParentsShareTheLeavesVertices) {
-  // §5.1: a coarse node's vertices are the finest mesh's vertices on its edges.
-  const Model& m = bunny64();
-  std::size_t coarse = 0, shared = 0;
-  for (std::size_t n = 0; n < m.tree.size(); ++n) {
-    if (m.tree.is_leaf(n)) continue;
-    for (std::int32_t v : m.tree.nodes.edge_vertices[n]) {
-      if (v < 0) continue;
-      ++coarse;
-      shared += std::size_t(v) < m.tree.mesh_vertices;
-    }
-  }
-  ASSERT_GT(coarse, 1000u);
-  EXPECT_GT(double(shared), 0.99 * double(coarse));
-}
-
 TEST(LodArray, EveryNodeExpandsOnceParentsFirst) {
   const Model& m = bunny64();
   std::vector<int> seen(m.tree.size(), 0);
