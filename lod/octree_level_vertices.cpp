@@ -13,8 +13,8 @@
 // Indices change, not topology: an edge of a level resolves to one vertex,
 // and every node of a cut sees each edge at one level (the neighbour rule), so
 // a cut joins the same copies wherever the leaves' shared vertex joined it.
+#include "core/mesh_edges.h"
 #include "lod/octree_build.h"
-#include "reconstruct/signed_distance.h"
 
 #include <Eigen/Cholesky>
 
@@ -37,23 +37,68 @@ constexpr float kLimit = 0.7f;
 // Only planes facing the crossing's way count: the far side of a thin part
 // (an ear) is another sheet.
 constexpr float kSameSheet = 0.5f;
+// At most this many vertices' planes, the nearest along the mesh: only the
+// coarsest levels' reach holds more (level 1 of the bunny at R = 256, a
+// quarter of the mesh).
+constexpr std::size_t kMostPlanes = 8192;
 // Pulls the least-squares point towards the crossing, per plane: where the
 // planes are nearly parallel (a flat or cylindrical stretch) it would slide
 // along them. Stronger pulls (0.05) gave back a third of the gain.
 constexpr double kStay = 0.01;
 
+// The mesh's vertices, each with the vertices it shares an edge with.
+struct Neighbours {
+  std::vector<std::int32_t> first;  // vertices + 1 offsets into `of`
+  std::vector<std::int32_t> of;
+
+  explicit Neighbours(const TriangleMesh& mesh) : first(mesh.positions.size() + 1, 0) {
+    const MeshEdges edges = mesh_edges(mesh.triangles, mesh.positions.size());
+    for (const auto& e : edges.ends) ++first[std::size_t(e[0]) + 1], ++first[std::size_t(e[1]) + 1];
+    for (std::size_t v = 0; v + 1 < first.size(); ++v) first[v + 1] += first[v];
+    of.resize(std::size_t(first.back()));
+    std::vector<std::int32_t> at(first.begin(), first.end() - 1);
+    for (const auto& e : edges.ends) {
+      of[std::size_t(at[std::size_t(e[0])]++)] = e[1];
+      of[std::size_t(at[std::size_t(e[1])]++)] = e[0];
+    }
+  }
+};
+
+// A thread's scratch for the walks: a mark per vertex (the walk's number, so
+// nothing is cleared between walks) and the queue.
+struct Walk {
+  std::vector<std::uint32_t> mark;
+  std::uint32_t number = 0;
+  std::vector<std::int32_t> queue;
+};
+
 // Where the copy of mesh vertex `at` goes for a level whose cubes are `size`.
-Vec3f placed(const OrientedPoints& mesh, const PointIndex& index, std::int32_t at, float size,
-             std::vector<std::int32_t>* near) {
+// The planes are those of the mesh vertices within reach that the mesh joins
+// to `at` inside the ball: a walk along its edges touches only them, and the
+// far side of a thin part, which only its rim joins, stays out.
+Vec3f placed(const TriangleMesh& mesh, const std::vector<Vec3f>& normals, const Neighbours& neighbours,
+             std::int32_t at, float size, Walk* walk) {
   const Vec3f p = mesh.positions[std::size_t(at)];
-  const Vec3f n0 = mesh.normals[std::size_t(at)];
-  index.within(p, kReach * size, near);
+  const Vec3f n0 = normals[std::size_t(at)];
+  const float reach2 = (kReach * size) * (kReach * size);
   Eigen::Matrix3d planes = Eigen::Matrix3d::Zero();
   Eigen::Vector3d offsets = Eigen::Vector3d::Zero();
   double along = 0.0, across = 0.0;  // the same along n0 alone
   int count = 0;
-  for (std::int32_t i : *near) {
-    const Vec3f& n = mesh.normals[std::size_t(i)];
+  const std::uint32_t number = ++walk->number;
+  walk->queue.assign(1, at);
+  walk->mark[std::size_t(at)] = number;
+  for (std::size_t head = 0; head < walk->queue.size(); ++head) {
+    const std::int32_t i = walk->queue[head];
+    for (std::int32_t k = neighbours.first[std::size_t(i)]; k < neighbours.first[std::size_t(i) + 1]; ++k) {
+      const std::int32_t j = neighbours.of[std::size_t(k)];
+      if (walk->mark[std::size_t(j)] == number || walk->queue.size() == kMostPlanes ||
+          (mesh.positions[std::size_t(j)] - p).squaredNorm() > reach2)
+        continue;
+      walk->mark[std::size_t(j)] = number;
+      walk->queue.push_back(j);
+    }
+    const Vec3f& n = normals[std::size_t(i)];
     const float facing = n.dot(n0);
     if (facing < kSameSheet) continue;
     const double offset = n.dot(mesh.positions[std::size_t(i)] - p);
@@ -64,7 +109,7 @@ Vec3f placed(const OrientedPoints& mesh, const PointIndex& index, std::int32_t a
     across += double(facing) * facing;
     ++count;
   }
-  if (count == 0) return p;
+  if (count == 0) return p;  // a vertex no triangle uses has no normal
   const float limit = kLimit * size;
   planes.diagonal().array() += kStay * count;
   const Eigen::Vector3f move = planes.ldlt().solve(offsets).cast<float>();
@@ -120,19 +165,17 @@ void level_vertices(const TriangleMesh& mesh, const LevelBegin& level_begin, McO
 
   const std::size_t copies = sources.size();
   vertices.positions.resize(before + copies);
-  OrientedPoints planes;
-  planes.positions = mesh.positions;
-  planes.normals = vertex_normals(mesh);
-  const PointIndex index(planes);
+  const std::vector<Vec3f> normals = vertex_normals(mesh);
+  const Neighbours neighbours(mesh);
   const float cube = float(tree->grid.cube_size);
 #pragma omp parallel
   {
-    std::vector<std::int32_t> near;
+    Walk walk;
+    walk.mark.assign(mesh.positions.size(), 0);
 #pragma omp for schedule(dynamic, 256)
     for (std::size_t i = 0; i < copies; ++i) {
-      const std::int32_t v = sources[i];
       const float size = std::ldexp(cube, depth - copy_levels[i]);
-      vertices.positions[before + i] = placed(planes, index, v, size, &near);
+      vertices.positions[before + i] = placed(mesh, normals, neighbours, sources[i], size, &walk);
     }
   }
   // Normals and colours are the copied vertex's.

@@ -60,17 +60,6 @@ void PointIndex::knn(const Vec3f* queries, std::size_t count, int k, std::int32_
   impl_->index.knnSearch(q, idx, dist, std::size_t(k), params);
 }
 
-void PointIndex::within(const Vec3f& query, float radius, std::vector<std::int32_t>* indices) const {
-  // FLANN's vector form takes rows of std::vector<int>; one kept per thread.
-  thread_local std::vector<std::vector<int>> found(1);
-  thread_local std::vector<std::vector<float>> squared(1);
-  flann::Matrix<float> q(const_cast<float*>(query.data()), 1, 3);
-  flann::SearchParams params;
-  params.sorted = false;
-  impl_->index.radiusSearch(q, found, squared, radius * radius, params);
-  indices->assign(found[0].begin(), found[0].end());
-}
-
 void signed_distances(const OrientedPoints& points, const PointIndex& index,
                       const std::vector<Vec3f>& queries, float cube_size,
                       const SignedDistanceOptions& options, int threads,

@@ -7,7 +7,6 @@
 #include <functional>
 #include <memory>
 #include <string>
-#include <vector>
 
 namespace scan2lod {
 
@@ -44,10 +43,6 @@ class PointIndex {
   // count x k. Runs on `threads` threads (0: all).
   void knn(const Vec3f* queries, std::size_t count, int k, std::int32_t* indices,
            float* squared_distances, int threads) const;
-
-  // The points within `radius` of `query` (unsorted), into `indices`, whose
-  // capacity a caller with many queries keeps. One thread.
-  void within(const Vec3f& query, float radius, std::vector<std::int32_t>* indices) const;
 
  private:
   struct Impl;

@@ -57,7 +57,7 @@ TEST(LevelVertices, ASpheresCoarseLevelsStraddleIt) {
   const double full = mean_distance_to_sphere(tree.vertices.positions, level, r);
   // The same levels with every vertex on the sphere: chords, as the mesh's
   // shared vertices made them. Placed by the planes, 1 %, 3 % and 10 % came
-  // to 0.58, 0.63 and 0.67 of the chords' distance.
+  // to under 0.6, 0.63 and 0.67 of the chords' distance.
   std::vector<Vec3f> on_sphere = tree.vertices.positions;
   for (Vec3f& p : on_sphere) p *= float(r / double(p.norm()));
   for (double percent : {1.0, 3.0, 10.0}) {
