@@ -37,6 +37,10 @@ constexpr float kLimit = 0.7f;
 // Only planes facing the crossing's way count: the far side of a thin part
 // (an ear) is another sheet.
 constexpr float kSameSheet = 0.5f;
+// Moves shorter than this share of a leaf cube are not made: on a flat face
+// they only take the copies onto its plane, where three that shared a lattice
+// line before fall on one line (a box's faces at R = 256).
+constexpr float kLeast = 0.1f;
 // At most this many vertices' planes, the nearest along the mesh: only the
 // coarsest levels' reach holds more (level 1 of the bunny at R = 256, a
 // quarter of the mesh).
@@ -77,7 +81,7 @@ struct Walk {
 // to `at` inside the ball: a walk along its edges touches only them, and the
 // far side of a thin part, which only its rim joins, stays out.
 Vec3f placed(const TriangleMesh& mesh, const std::vector<Vec3f>& normals, const Neighbours& neighbours,
-             std::int32_t at, float size, Walk* walk) {
+             std::int32_t at, float size, float cube, Walk* walk) {
   const Vec3f p = mesh.positions[std::size_t(at)];
   const Vec3f n0 = normals[std::size_t(at)];
   const float reach2 = (kReach * size) * (kReach * size);
@@ -113,10 +117,42 @@ Vec3f placed(const TriangleMesh& mesh, const std::vector<Vec3f>& normals, const 
   const float limit = kLimit * size;
   planes.diagonal().array() += kStay * count;
   const Eigen::Vector3f move = planes.ldlt().solve(offsets).cast<float>();
+  if (move.norm() < kLeast * cube) return p;
   if (move.norm() <= limit) return p + move;
   // Beyond the limit the planes disagree (a crease, a corner): move along the
   // normal alone, as far as the limit allows.
-  return p + std::clamp(float(along / across), -limit, limit) * n0;
+  const float step = std::clamp(float(along / across), -limit, limit);
+  return std::fabs(step) < kLeast * cube ? p : p + step * n0;
+}
+
+// Where a node's own triangle would lose its area or turn over with its copies
+// placed (on a box, copies near an edge or a corner meet its planes in one
+// line or point), its copies go back to the vertices they copy, where the
+// triangle was whole. Until no triangle turns: a copy sent back can turn
+// another of its triangles only towards how it was.
+void keep_triangles_turned(const LevelBegin& level_begin, std::size_t first_copy,
+                           const std::vector<std::int32_t>& sources, McOctree* tree) {
+  std::vector<Vec3f>& positions = tree->vertices.positions;
+  auto was = [&](std::int32_t v) {
+    return positions[std::size_t(v) >= first_copy ? std::size_t(sources[std::size_t(v) - first_copy]) : std::size_t(v)];
+  };
+  // The coarse nodes' own triangles follow the leaves' (laid out from the leaves' level up).
+  const auto first = std::size_t(tree->nodes.first_triangle[std::size_t(level_begin[tree->depth - 1])]);
+  for (bool moved = true; moved;) {
+    moved = false;
+    for (std::size_t t = first; t < tree->triangles.size(); ++t) {
+      const Triangle& tri = tree->triangles[t];
+      const Vec3f now = (positions[std::size_t(tri[1])] - positions[std::size_t(tri[0])])
+                            .cross(positions[std::size_t(tri[2])] - positions[std::size_t(tri[0])]);
+      const Vec3f before = (was(tri[1]) - was(tri[0])).cross(was(tri[2]) - was(tri[0]));
+      if (now.dot(before) > 0.f && (now.x() != 0.f || now.y() != 0.f || now.z() != 0.f)) continue;
+      for (std::int32_t v : tri)
+        if (std::size_t(v) >= first_copy && positions[std::size_t(v)] != was(v)) {
+          positions[std::size_t(v)] = was(v);
+          moved = true;
+        }
+    }
+  }
 }
 
 }  // namespace
@@ -175,9 +211,10 @@ void level_vertices(const TriangleMesh& mesh, const LevelBegin& level_begin, McO
 #pragma omp for schedule(dynamic, 256)
     for (std::size_t i = 0; i < copies; ++i) {
       const float size = std::ldexp(cube, depth - copy_levels[i]);
-      vertices.positions[before + i] = placed(mesh, normals, neighbours, sources[i], size, &walk);
+      vertices.positions[before + i] = placed(mesh, normals, neighbours, sources[i], size, cube, &walk);
     }
   }
+  keep_triangles_turned(level_begin, before, sources, tree);
   // Normals and colours are the copied vertex's.
   if (!vertices.normals.empty()) {
     vertices.normals.resize(before + copies);
