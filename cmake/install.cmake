@@ -12,7 +12,8 @@ install(TARGETS scan2lod_runtime EXPORT scan2lodTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
 # The runtime's headers and the plain-data headers they include.
 foreach(header
-    core/types.h core/progress.h core/error.h core/mesh_edges.h core/parallel_jobs.h
+    core/types.h core/array_view.h core/large_array.h core/progress.h core/error.h core/mesh_edges.h
+    core/parallel_jobs.h
     io/atomic_file.h io/gltf_file.h
     lod/lod_model.h lod/model_file.h lod/mc_octree.h lod/lod_array.h lod/extract.h lod/transition.h
     lod/lod_cursor.h lod/cluster_hierarchy.h lod/cluster_cut.h

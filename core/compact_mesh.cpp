@@ -2,8 +2,8 @@
 
 namespace scan2lod {
 
-TriangleMesh compact_mesh(const std::vector<Vec3f>& positions, const std::vector<Vec3f>& normals,
-                          const std::vector<Rgb>& colors, const std::vector<std::vector<Triangle>*>& lists) {
+TriangleMesh compact_mesh(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
+                          ArrayView<Rgb> colors, const std::vector<std::vector<Triangle>*>& lists) {
   // Number the used vertices first, so that each output array is allocated
   // once at its final size (growing them would copy and fault in pages).
   std::vector<std::int32_t> remap(positions.size(), -1);

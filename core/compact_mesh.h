@@ -3,6 +3,7 @@
 // into a self-contained mesh.
 #pragma once
 
+#include "core/array_view.h"
 #include "core/types.h"
 
 #include <vector>
@@ -13,8 +14,8 @@ namespace scan2lod {
 // not empty) that the triangle lists in `lists` use, in first-use order, and
 // rewrites every list to index the returned mesh. The returned mesh's own
 // triangles are left empty. Every index must be < positions.size().
-TriangleMesh compact_mesh(const std::vector<Vec3f>& positions, const std::vector<Vec3f>& normals,
-                          const std::vector<Rgb>& colors, const std::vector<std::vector<Triangle>*>& lists);
+TriangleMesh compact_mesh(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
+                          ArrayView<Rgb> colors, const std::vector<std::vector<Triangle>*>& lists);
 
 // The numbering compact_mesh uses, for callers that compact many times over
 // one vertex array: rewrites `triangles` to new ids in first-use order, from

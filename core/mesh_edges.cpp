@@ -42,7 +42,7 @@ MeshEdges mesh_edges(const std::vector<Triangle>& triangles, std::size_t vertex_
   return edges;
 }
 
-double mean_edge_length(const std::vector<Vec3f>& p, const std::vector<Triangle>& triangles, std::size_t stride) {
+double mean_edge_length(ArrayView<Vec3f> p, const std::vector<Triangle>& triangles, std::size_t stride) {
   double sum = 0;
   std::size_t n = 0;
   for (std::size_t i = 0; i < triangles.size(); i += stride, ++n) {

@@ -5,6 +5,7 @@
 // side was most of their cost.
 #pragma once
 
+#include "core/array_view.h"
 #include "core/types.h"
 
 #include <array>
@@ -27,7 +28,7 @@ MeshEdges mesh_edges(const std::vector<Triangle>& triangles, std::size_t vertex_
 // Mean length of the triangles' sides (each shared edge counted per side),
 // over every `stride`-th triangle; 0 without triangles. A level's scale: what
 // its detail spans on screen.
-double mean_edge_length(const std::vector<Vec3f>& positions, const std::vector<Triangle>& triangles,
+double mean_edge_length(ArrayView<Vec3f> positions, const std::vector<Triangle>& triangles,
                         std::size_t stride = 1);
 
 }  // namespace scan2lod

@@ -2,7 +2,7 @@
 
 namespace scan2lod {
 
-Aabb bounds(const std::vector<Vec3f>& points) {
+Aabb bounds(ArrayView<Vec3f> points) {
   Aabb box;
   for (const Vec3f& p : points) box.extend(p);
   return box;

@@ -2,6 +2,8 @@
 // OpenMesh meshes, VTK poly data) stay at the edges; these are what stages share.
 #pragma once
 
+#include "core/array_view.h"
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -80,6 +82,6 @@ struct Aabb {
   float diagonal() const { return empty() ? 0.f : extent().norm(); }
 };
 
-Aabb bounds(const std::vector<Vec3f>& points);
+Aabb bounds(ArrayView<Vec3f> points);
 
 }  // namespace scan2lod

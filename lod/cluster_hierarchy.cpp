@@ -30,7 +30,7 @@ struct Sphere {
 
 // Phase 1: one id per position (the smallest vertex index there), so that
 // split attributes do not split adjacency or locks.
-std::vector<std::int32_t> weld_positions(const std::vector<Vec3f>& positions) {
+std::vector<std::int32_t> weld_positions(ArrayView<Vec3f> positions) {
   std::vector<std::int32_t> order(positions.size()), weld(positions.size());
   std::iota(order.begin(), order.end(), 0);
   auto less = [&](std::int32_t a, std::int32_t b) {
@@ -49,7 +49,7 @@ std::vector<std::int32_t> weld_positions(const std::vector<Vec3f>& positions) {
 }
 
 // The smallest-ish sphere (box centre) around some points.
-Sphere points_sphere(const std::vector<Vec3f>& positions, const Triangle* tris, std::size_t count) {
+Sphere points_sphere(ArrayView<Vec3f> positions, const Triangle* tris, std::size_t count) {
   Aabb box;
   for (std::size_t t = 0; t < count; ++t)
     for (std::int32_t v : tris[t]) box.extend(positions[std::size_t(v)]);
@@ -87,7 +87,7 @@ struct SplitGroup {
 // keeps meshlets compact), reordered cluster by cluster: part[t] is t's
 // cluster. Each triangle keeps its corners and their order, so the full
 // mesh's clusters are the input mesh.
-std::vector<std::int32_t> meshlet_parts(const std::vector<Vec3f>& positions, std::vector<Triangle>* triangles,
+std::vector<std::int32_t> meshlet_parts(ArrayView<Vec3f> positions, std::vector<Triangle>* triangles,
                                         int cluster_triangles, int* parts) {
   const std::size_t max_triangles = std::size_t(std::clamp(cluster_triangles / 4 * 4, 4, 512));
   const std::size_t max_vertices = 255;
@@ -123,7 +123,7 @@ std::vector<std::int32_t> meshlet_parts(const std::vector<Vec3f>& positions, std
 // error at 50k-100k on the bunny against 1.14x) but serialised the threads on
 // its one random state: the build took 6.7x a whole meshopt_simplify to 1 %
 // against 5.0x (same run).
-void split_group(const std::vector<Vec3f>& positions, int cluster_triangles, SplitGroup* g) {
+void split_group(ArrayView<Vec3f> positions, int cluster_triangles, SplitGroup* g) {
   std::vector<Triangle>& triangles = g->simplified.triangles;
   g->parts = 1;
   if (triangles.size() > std::size_t(cluster_triangles))
@@ -213,8 +213,8 @@ void on_threads(std::size_t count, int threads, Work work) {
 
 }  // namespace
 
-ClusterHierarchy build_cluster_hierarchy(const std::vector<Vec3f>& positions, const std::vector<Vec3f>& normals,
-                                         const std::vector<Rgb>& colors, const std::vector<Triangle>& triangles,
+ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
+                                         ArrayView<Rgb> colors, const std::vector<Triangle>& triangles,
                                          const ClusterOptions& options) {
   if (triangles.empty()) throw InputError("", "the cluster hierarchy needs a mesh with triangles, got none");
   for (const Triangle& t : triangles)
@@ -240,9 +240,9 @@ ClusterHierarchy build_cluster_hierarchy(const std::vector<Vec3f>& positions, co
     sphere[c] = points_sphere(positions, &h.triangles[h.clusters[c].first_triangle], h.clusters[c].triangle_count);
 
   SimplifyInput input;
-  input.positions = &positions;
-  input.normals = &normals;
-  input.colors = &colors;
+  input.positions = positions;
+  input.normals = normals;
+  input.colors = colors;
   input.scale = diagonal > 0 ? 1.f / diagonal : 1.f;
   input.normal_weight = options.normal_weight;
   input.color_weight = options.color_weight;

@@ -18,6 +18,7 @@
 // that is the error projected to the screen.
 #pragma once
 
+#include "core/array_view.h"
 #include "core/types.h"
 
 #include <cstdint>
@@ -80,8 +81,8 @@ struct ClusterOptions {
 // Vertices with equal positions are treated as one for adjacency and locking;
 // simplification only ever keeps existing vertices (half-edge collapse), so
 // the hierarchy adds none. Throws InputError when there are no triangles.
-ClusterHierarchy build_cluster_hierarchy(const std::vector<Vec3f>& positions, const std::vector<Vec3f>& normals,
-                                         const std::vector<Rgb>& colors, const std::vector<Triangle>& triangles,
+ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
+                                         ArrayView<Rgb> colors, const std::vector<Triangle>& triangles,
                                          const ClusterOptions& options = {});
 
 }  // namespace scan2lod

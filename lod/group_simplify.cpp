@@ -296,7 +296,7 @@ std::vector<std::int32_t> load_group(const std::vector<Triangle>& triangles, con
 // when weighted), with border planes so that borders slide along themselves.
 void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& global, const SimplifyInput& in,
                     bool use_normals, bool use_colors, GroupQuadrics* quadrics) {
-  const std::vector<Vec3f>& positions = *in.positions;
+  const ArrayView<Vec3f> positions = in.positions;
   GroupQuadrics& q = *quadrics;
   const std::size_t nv = global.size();
   q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
@@ -308,9 +308,9 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
     int d = 0;
     for (int i = 0; i < 3; ++i) x[d++] = double(positions[gv][i]) * in.scale;
     if (use_normals)
-      for (int i = 0; i < 3; ++i) x[d++] = double((*in.normals)[gv][i]) * in.normal_weight;
+      for (int i = 0; i < 3; ++i) x[d++] = double(in.normals[gv][i]) * in.normal_weight;
     if (use_colors)
-      for (int i = 0; i < 3; ++i) x[d++] = double((*in.colors)[gv][std::size_t(i)]) / 255.0 * in.color_weight;
+      for (int i = 0; i < 3; ++i) x[d++] = double(in.colors[gv][std::size_t(i)]) / 255.0 * in.color_weight;
   }
   for (const auto& tri : g.tris) {
     const double* p[3] = {q.x[std::size_t(tri[0])].data(), q.x[std::size_t(tri[1])].data(), q.x[std::size_t(tri[2])].data()};
@@ -424,11 +424,11 @@ std::vector<int> collapse_to_target(std::size_t target, GroupTopology* group, Gr
 
 SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size_t target,
                                const SimplifyInput& in) {
-  const bool use_normals = in.normal_weight > 0 && in.normals && !in.normals->empty();
-  const bool use_colors = in.color_weight > 0 && in.colors && !in.colors->empty();
+  const bool use_normals = in.normal_weight > 0 && !in.normals.empty();
+  const bool use_colors = in.color_weight > 0 && !in.colors.empty();
   thread_local GroupTopology g;
   thread_local GroupQuadrics q;  // reused: a group's quadrics are about a megabyte
-  std::vector<int>& local = local_index(in.positions->size());
+  std::vector<int>& local = local_index(in.positions.size());
   const std::vector<std::int32_t> global = load_group(triangles, in, local, &g);
   group_quadrics(g, global, in, use_normals, use_colors, &q);
   std::vector<int> moved_to = collapse_to_target(target, &g, &q);

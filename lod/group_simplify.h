@@ -18,9 +18,9 @@ namespace scan2lod {
 
 // What the simplifier reads of the mesh: shared by every group.
 struct SimplifyInput {
-  const std::vector<Vec3f>* positions = nullptr;
-  const std::vector<Vec3f>* normals = nullptr;  // empty or one per position
-  const std::vector<Rgb>* colors = nullptr;     // empty or one per position
+  ArrayView<Vec3f> positions;
+  ArrayView<Vec3f> normals;  // empty or one per position
+  ArrayView<Rgb> colors;     // empty or one per position
   // locked[v] != 0: v is shared with another group and must not move.
   const std::vector<std::uint8_t>* locked = nullptr;
   float scale = 1;           // 1 / the mesh's diagonal: quadrics see a unit-sized mesh

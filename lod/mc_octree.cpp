@@ -86,7 +86,9 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   McOctree tree;
   tree.grid = leaves.grid;
   while ((1 << tree.depth) < leaves.grid.resolution) ++tree.depth;
-  tree.vertices = {mesh.positions, mesh.normals, mesh.colors};
+  tree.vertices.positions.assign(mesh.positions.begin(), mesh.positions.end());
+  tree.vertices.normals.assign(mesh.normals.begin(), mesh.normals.end());
+  tree.vertices.colors.assign(mesh.colors.begin(), mesh.colors.end());
   tree.mesh_vertices = mesh.positions.size();
 
   const LevelBegin level_begin = build_skeleton(leaves, &tree);

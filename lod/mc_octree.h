@@ -27,6 +27,7 @@
 
 #include "core/types.h"
 #include "lod/transition.h"
+#include "core/large_array.h"
 #include "reconstruct/marching_cubes.h"
 #include "reconstruct/signed_distance.h"
 
@@ -41,16 +42,16 @@ struct MeshField;  // reconstruct/mesh_field.h
 // The nodes, level by level from the root (level 0); a node's children are
 // contiguous and on the next level. Every array has one entry per node.
 struct OctreeNodes {
-  std::vector<std::uint64_t> keys;  // packed (x, y, z) on its level's lattice
-  std::vector<std::uint8_t> levels;
-  std::vector<std::int32_t> parents;       // -1 for the root
-  std::vector<std::int32_t> first_child;   // -1 for leaves
-  std::vector<std::uint8_t> child_counts;
-  std::vector<std::uint8_t> cases;         // mask of inside corners
-  std::vector<std::array<std::int32_t, 12>> edge_vertices;  // vertex per crossed edge, else -1
-  std::vector<std::int32_t> first_triangle;  // the node's own triangles: [first, first + count)
-  std::vector<std::uint8_t> triangle_counts;
-  std::vector<float> metrics;  // LOD metric (OctreeOptions::metric): larger expands first; 0 for leaves
+  LargeArray<std::uint64_t> keys;  // packed (x, y, z) on its level's lattice
+  LargeArray<std::uint8_t> levels;
+  LargeArray<std::int32_t> parents;       // -1 for the root
+  LargeArray<std::int32_t> first_child;   // -1 for leaves
+  LargeArray<std::uint8_t> child_counts;
+  LargeArray<std::uint8_t> cases;         // mask of inside corners
+  LargeArray<std::array<std::int32_t, 12>> edge_vertices;  // vertex per crossed edge, else -1
+  LargeArray<std::int32_t> first_triangle;  // the node's own triangles: [first, first + count)
+  LargeArray<std::uint8_t> triangle_counts;
+  LargeArray<float> metrics;  // LOD metric (OctreeOptions::metric): larger expands first; 0 for leaves
 
   std::size_t size() const { return keys.size(); }
 };
@@ -58,10 +59,10 @@ struct OctreeNodes {
 // Crack patching (lod/transition.h), for the nodes above the leaves, which
 // come first: indexed by node in [0, internal nodes).
 struct OctreeTransitions {
-  std::vector<std::uint32_t> boundary_inside;  // bit p: local lattice point p is inside
-  std::vector<std::array<std::int32_t, kSubEdges>> sub_edge_vertices;
-  std::vector<std::int32_t> centre_vertices;  // -1 where nothing crosses the node's boundary
-  std::vector<std::array<std::int32_t, 27>> neighbours;  // node in each cell around (13: itself), or -1
+  LargeArray<std::uint32_t> boundary_inside;  // bit p: local lattice point p is inside
+  LargeArray<std::array<std::int32_t, kSubEdges>> sub_edge_vertices;
+  LargeArray<std::int32_t> centre_vertices;  // -1 where nothing crosses the node's boundary
+  LargeArray<std::array<std::int32_t, 27>> neighbours;  // node in each cell around (13: itself), or -1
 
   std::size_t size() const { return centre_vertices.size(); }
 };
@@ -82,9 +83,9 @@ struct OctreePatches {
 // ones it adds (on edges no leaf crosses, each level's own copies of the mesh
 // vertices its edges resolve to, and the centres).
 struct VertexArray {
-  std::vector<Vec3f> positions;
-  std::vector<Vec3f> normals;  // empty or one per position
-  std::vector<Rgb> colors;     // empty or one per position
+  LargeArray<Vec3f> positions;
+  LargeArray<Vec3f> normals;  // empty or one per position
+  LargeArray<Rgb> colors;     // empty or one per position
   std::size_t size() const { return positions.size(); }
 };
 
@@ -94,7 +95,7 @@ struct McOctree {
 
   OctreeNodes nodes;
   OctreeTransitions transitions;
-  std::vector<Triangle> triangles;  // every node's own triangles (OctreeNodes::first_triangle)
+  LargeArray<Triangle> triangles;  // every node's own triangles (OctreeNodes::first_triangle)
   OctreePatches patches;
   // Built with the tree; LodModel keeps them in its shared VertexArray and
   // leaves these empty (model_from_octree).

@@ -103,11 +103,11 @@ struct Payload {
   void* vector = nullptr;
 };
 
-template <class T>
-Payload array(std::vector<T>& v) {
+template <class T, class Allocator>
+Payload array(std::vector<T, Allocator>& v) {
   return {std::uint32_t(sizeof(T)), std::uint64_t(v.size()), static_cast<void*>(v.data()),
           [](void* vector, std::uint64_t count) -> void* {
-            auto& v = *static_cast<std::vector<T>*>(vector);
+            auto& v = *static_cast<std::vector<T, Allocator>*>(vector);
             resize_for_load(&v, count);
             return static_cast<void*>(v.data());
           },
@@ -632,7 +632,7 @@ void Decoder::check_octree_arrays(const McOctree& t) const {
   if (t.mesh_vertices > vertices)
     bad("mesh_vertices " + std::to_string(t.mesh_vertices) + " exceeds the " + std::to_string(vertices) + " vertices");
   if (t.triangles.size() > kMaxIndex) bad("more triangles than 32-bit indices address");
-  auto check_triangles = [&](const char* tag, const std::vector<Triangle>& tris) {
+  auto check_triangles = [&](const char* tag, const auto& tris) {
     for (std::size_t i = 0; i < tris.size(); ++i)
       for (std::int32_t v : tris[i])
         if (v < 0 || std::size_t(v) >= vertices)
@@ -643,7 +643,7 @@ void Decoder::check_octree_arrays(const McOctree& t) const {
   check_triangles("PTRI", t.patches.triangles);
 
   // Hole patches by group: offsets that run from 0 to the end of their array.
-  auto check_offsets = [&](const char* tag, const std::vector<std::int32_t>& first, std::size_t total,
+  auto check_offsets = [&](const char* tag, const auto& first, std::size_t total,
                            const char* of) {
     if (first.empty() ? total != 0 : first.front() != 0 || std::size_t(first.back()) != total ||
                                          !std::is_sorted(first.begin(), first.end()))

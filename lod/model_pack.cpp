@@ -7,18 +7,7 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include <sys/mman.h>
-
 namespace scan2lod {
-
-void advise_huge_pages(void* data, std::size_t bytes) {
-  constexpr std::uintptr_t kHuge = std::uintptr_t(2) << 20;
-  if (bytes < kHuge) return;
-  // The whole 2 MB blocks inside [data, data + bytes): the kernel backs only those with huge pages.
-  const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
-  const std::uintptr_t end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(kHuge - 1);
-  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // a hint: failure is harmless
-}
 
 namespace {
 
@@ -144,10 +133,9 @@ void unpack_nodes(const std::vector<std::uint8_t>& masks, int depth, const std::
 }
 
 // Vertices on the edges (or sub-edges) each mask names, node by node.
-template <std::size_t kEdges, class Mask>
+template <std::size_t kEdges, class Mask, class Out>
 void unpack_masked(const std::vector<Mask>& masks, const std::vector<std::int32_t>& packed, const char* mask_tag,
-                   const char* packed_tag, const std::string& source,
-                   std::vector<std::array<std::int32_t, kEdges>>* out) {
+                   const char* packed_tag, const std::string& source, Out* out) {
   auto bad = [&](const std::string& what) { throw InputError(source, "inconsistent model: " + what); };
   resize_for_load(out, masks.size());
   std::size_t next = 0;
@@ -176,7 +164,6 @@ void unpack_triangles(const std::vector<std::uint8_t>& masks, const std::string&
   for (std::size_t i = 0; i < nodes.size(); ++i) total += std::size_t(__builtin_popcount(masks[i]));
   tree->triangles.clear();
   tree->triangles.reserve(total);
-  advise_huge_pages(tree->triangles.data(), total * sizeof(Triangle));
   for (int level = tree->depth; level >= 0; --level)
     for (std::int32_t i = begin[level]; i < begin[level + 1]; ++i) {
       const CubeCase& cc = cube_cases()[nodes.cases[i]];

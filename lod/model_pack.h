@@ -33,16 +33,12 @@ struct PackedOctree {
   std::vector<std::int32_t> sub_edge_vertices;
 };
 
-// Resizes a vector the decoder is about to fill to `count` elements. A large
-// one is asked for transparent huge pages before it is first touched: the
-// first touch of each 4 KB page is a fault, and faults were most of the time
-// a model took to load (the bunny at R = 256 unpacks to some 50 MB).
-void advise_huge_pages(void* data, std::size_t bytes);
-template <class T>
-void resize_for_load(std::vector<T>* v, std::size_t count) {
+// Resizes a vector the decoder is about to fill to `count` elements, without
+// growing it in steps.
+template <class Vector>
+void resize_for_load(Vector* v, std::size_t count) {
   v->clear();
   v->reserve(count);
-  advise_huge_pages(v->data(), count * sizeof(T));
   v->resize(count);
 }
 

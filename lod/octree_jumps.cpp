@@ -15,7 +15,7 @@ namespace octree_build {
 
 void pull_jump_vertices(const std::vector<std::int32_t>& jumps, const ClosestPoints& closest, McOctree* tree) {
   if (jumps.empty()) return;
-  std::vector<Vec3f>& positions = tree->vertices.positions;
+  auto& positions = tree->vertices.positions;
   std::vector<Vec3f> at(jumps.size()), to;
   for (std::size_t i = 0; i < jumps.size(); ++i) at[i] = positions[std::size_t(jumps[i])];
   closest(at, &to);

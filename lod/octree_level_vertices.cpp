@@ -132,7 +132,7 @@ Vec3f placed(const TriangleMesh& mesh, const std::vector<Vec3f>& normals, const 
 // another of its triangles only towards how it was.
 void keep_triangles_turned(const LevelBegin& level_begin, std::size_t first_copy,
                            const std::vector<std::int32_t>& sources, McOctree* tree) {
-  std::vector<Vec3f>& positions = tree->vertices.positions;
+  auto& positions = tree->vertices.positions;
   auto was = [&](std::int32_t v) {
     return positions[std::size_t(v) >= first_copy ? std::size_t(sources[std::size_t(v) - first_copy]) : std::size_t(v)];
   };

@@ -114,7 +114,7 @@ constexpr std::int64_t kCountedUpTo = 25000;  // triangles
 void count_levels(const McOctree& tree, const LodArray& lod, const MeshTopology& full,
                   const std::vector<std::int32_t>& priorities, std::size_t begin, std::size_t end, std::uint8_t* sound) {
   TriangleMesh level;
-  level.positions = tree.vertices.positions;
+  level.positions.assign(tree.vertices.positions.begin(), tree.vertices.positions.end());
   LodCursor cursor(tree, lod);
   for (std::size_t i = begin; i < end; ++i) {
     cursor.move_to(std::size_t(priorities[i]));
@@ -158,7 +158,7 @@ LodArray number_nodes(const McOctree& tree) {
   // What every level is held to.
   const MeshTopology full = [&] {
     TriangleMesh mesh;
-    mesh.positions = tree.vertices.positions;
+    mesh.positions.assign(tree.vertices.positions.begin(), tree.vertices.positions.end());
     mesh.triangles = full_triangles(tree);
     return mesh_topology(mesh);
   }();

@@ -41,7 +41,7 @@ const Built& bunny128() {
 
 TriangleMesh level_mesh(const LodModel& model, const std::vector<Triangle>& tris) {
   TriangleMesh m;
-  m.positions = model.vertices.positions;
+  m.positions.assign(model.vertices.positions.begin(), model.vertices.positions.end());
   m.triangles = tris;
   return m;
 }

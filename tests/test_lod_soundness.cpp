@@ -35,7 +35,7 @@ using scan2lod::testing::build_octree_model;
 std::size_t expect_sound_levels(const Built& b, std::size_t most, const char* name) {
   const std::vector<std::size_t> offered = monotone_priorities(b.lod);
   TriangleMesh level;
-  level.positions = b.tree.vertices.positions;
+  level.positions.assign(b.tree.vertices.positions.begin(), b.tree.vertices.positions.end());
   LodCursor cursor(b.tree, b.lod);
   cursor.move_to(b.lod.full());
   cursor.live_triangles(&level.triangles);

@@ -21,7 +21,7 @@ using namespace scan2lod;
 namespace {
 
 // Mean of | |p| - r | over points spread evenly on the triangles (area-weighted).
-double mean_distance_to_sphere(const std::vector<Vec3f>& positions, const std::vector<Triangle>& triangles, double r) {
+double mean_distance_to_sphere(ArrayView<Vec3f> positions, const std::vector<Triangle>& triangles, double r) {
   constexpr int kSteps = 6;
   double sum = 0.0, weight = 0.0;
   for (const Triangle& t : triangles) {
@@ -58,7 +58,7 @@ TEST(LevelVertices, ASpheresCoarseLevelsStraddleIt) {
   // The same levels with every vertex on the sphere: chords, as the mesh's
   // shared vertices made them. Placed by the planes, 1 %, 3 % and 10 % came
   // to under 0.6, 0.63 and 0.67 of the chords' distance.
-  std::vector<Vec3f> on_sphere = tree.vertices.positions;
+  std::vector<Vec3f> on_sphere(tree.vertices.positions.begin(), tree.vertices.positions.end());
   for (Vec3f& p : on_sphere) p *= float(r / double(p.norm()));
   for (double percent : {1.0, 3.0, 10.0}) {
     extract_lod(tree, m.lod, priority_for_percent(m.lod, percent), &expanded, &level);

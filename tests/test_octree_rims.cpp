@@ -23,7 +23,7 @@ using namespace scan2lod;
 namespace {
 
 // Unsigned distance from each point to the triangles.
-std::vector<float> distances_to(const std::vector<Vec3f>& positions, const std::vector<Triangle>& triangles,
+std::vector<float> distances_to(ArrayView<Vec3f> positions, const std::vector<Triangle>& triangles,
                                 const std::vector<Vec3f>& points) {
   namespace o3c = open3d::core;
   o3c::Tensor vertices = o3c::Tensor::Empty({std::int64_t(positions.size()), 3}, o3c::Float32);
@@ -46,7 +46,7 @@ std::vector<float> distances_to(const std::vector<Vec3f>& positions, const std::
   return std::vector<float>(p, p + points.size());
 }
 
-double area(const std::vector<Vec3f>& positions, const std::vector<Triangle>& triangles) {
+double area(ArrayView<Vec3f> positions, const std::vector<Triangle>& triangles) {
   double sum = 0.0;
   for (const Triangle& t : triangles)
     sum += 0.5 * double((positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]).norm());
@@ -60,7 +60,7 @@ TEST(OctreeRims, AnOpenScansCoarseLevelsEndAtItsRims) {
   const scan2lod::testing::OctreeModel b = scan2lod::testing::build_octree_model(
       load_oriented_points({std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun000.ply"}), 128);
   const McOctree& tree = b.tree;
-  const std::vector<Vec3f>& positions = tree.vertices.positions;
+  const auto& positions = tree.vertices.positions;
   std::vector<std::uint8_t> expanded(tree.size(), 0);
   std::vector<Triangle> full, level;
   extract_lod(tree, b.lod, b.lod.full(), &expanded, &full);

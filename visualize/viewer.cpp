@@ -370,9 +370,9 @@ void Viewer::Impl::build() {
       state.levels = source->levels();
       // Every level's vertices, once: points, normals and colours for VTK.
       TriangleMesh vertices;
-      vertices.positions = model.vertices.positions;
-      vertices.normals = model.vertices.normals;
-      vertices.colors = model.vertices.colors;
+      vertices.positions.assign(model.vertices.positions.begin(), model.vertices.positions.end());
+      vertices.normals.assign(model.vertices.normals.begin(), model.vertices.normals.end());
+      vertices.colors.assign(model.vertices.colors.begin(), model.vertices.colors.end());
       level_poly = mesh_to_poly_data(vertices);
       vertex_used.assign(vertices.positions.size(), 0);
       mesh_mapper->SetInputData(level_poly);

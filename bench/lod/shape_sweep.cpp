@@ -364,7 +364,7 @@ ClusterResult check_clusters(const LodModel& model, const MeshTopology& octree_f
   const ClusterCutTable table = cluster_cut_table(h);
   LevelExtractor extractor(model, LodStructure::kClusters);
   TriangleMesh mesh;
-  mesh.positions = model.vertices.positions;
+  mesh.positions.assign(model.vertices.positions.begin(), model.vertices.positions.end());
   const auto measure = [&](const LevelCut& cut) {
     mesh.triangles = cut.triangles;
     return mesh_topology(mesh);
@@ -618,7 +618,7 @@ class LevelMeasure {
 // they use, renumbered: measuring a coarse level then costs its size, not the
 // model's vertex count. `remap` (one entry per model vertex, -1 between calls)
 // is reused across calls.
-void compact_live(const LodCursor& cursor, const std::vector<Vec3f>& positions, std::vector<std::int32_t>* remap,
+void compact_live(const LodCursor& cursor, ArrayView<Vec3f> positions, std::vector<std::int32_t>* remap,
                   std::vector<Triangle>* live, TriangleMesh* level) {
   cursor.live_triangles(live);
   level->positions.clear();
