@@ -29,7 +29,8 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-std::vector<LevelRequest> requests_from(const std::vector<double>& percents, const std::vector<long long>& budgets) {
+std::vector<LevelRequest> requests_from(const std::vector<double>& percents, const std::vector<long long>& budgets,
+                                        bool at_most) {
   std::vector<LevelRequest> requests;
   for (double p : percents) {
     if (!(p > 0 && p <= 100)) throw InputError("", "--levels takes percentages in (0, 100], got " + std::to_string(p));
@@ -37,7 +38,7 @@ std::vector<LevelRequest> requests_from(const std::vector<double>& percents, con
   }
   for (long long t : budgets) {
     if (t < 1) throw InputError("", "--triangles takes budgets >= 1, got " + std::to_string(t));
-    requests.push_back(LevelRequest::at_triangles(t));
+    requests.push_back(at_most ? LevelRequest::at_most_triangles(t) : LevelRequest::at_triangles(t));
   }
   return requests;
 }
@@ -57,7 +58,7 @@ void add_export_command(CLI::App& app) {
     std::vector<long long> budgets;
     double pixel_error = 1;
     int height = 1080;
-    bool no_quantize = false, json = false;
+    bool no_quantize = false, json = false, at_most = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("export", "Several levels of a .mco model -> one glTF LOD chain, or a file each");
@@ -72,8 +73,10 @@ void add_export_command(CLI::App& app) {
                                         "Levels as percentages, e.g. 100,25,5,1 (the default)")
                             ->delimiter(',');
   CLI::Option* budgets = cmd->add_option("--triangles", args->budgets,
-                                         "Levels as triangle budgets, e.g. 200000,50000,10000,2000")
+                                         "Levels as triangle budgets, e.g. 200000,50000,10000,2000, each met within "
+                                         "10 % (as extract --triangles)")
                              ->delimiter(',');
+  cmd->add_flag("--at-most", args->at_most, "With --triangles: no level over its budget")->needs(budgets);
   levels->excludes(budgets);
   cmd->add_option("--format", args->format, "glb, gltf, ply, obj, off, stl or vtp (default: -o's extension)")
       ->check(CLI::IsMember({"glb", "gltf", "ply", "obj", "off", "stl", "vtp"}, CLI::ignore_case));
@@ -85,7 +88,7 @@ void add_export_command(CLI::App& app) {
   cmd->add_flag("--json", args->json, "Print the levels, files and timings as JSON");
   cmd->callback([args] {
     if (args->percents.empty() && args->budgets.empty()) args->percents = {100, 25, 5, 1};
-    const std::vector<LevelRequest> requests = requests_from(args->percents, args->budgets);
+    const std::vector<LevelRequest> requests = requests_from(args->percents, args->budgets, args->at_most);
     if (!(args->pixel_error > 0) || args->height < 1)
       throw InputError("", "--pixel-error must be > 0 and --height >= 1");
     std::string format = args->format;

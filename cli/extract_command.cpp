@@ -53,7 +53,7 @@ void add_extract_command(CLI::App& app) {
     double percent = 0, error = 0, fov = 45, pixel_error = 1;
     long long triangles = 0, priority = 0;
     int height = 1080;
-    bool json = false, no_quantize = false;
+    bool json = false, no_quantize = false, at_most = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("extract", "One level of detail of a .mco model -> mesh");
@@ -67,7 +67,11 @@ void add_extract_command(CLI::App& app) {
       "--percent", args->percent,
       "0 to 100: octree, the first P % of the LOD array; clusters, P % of the full triangle count");
   CLI::Option* triangles =
-      cmd->add_option("--triangles", args->triangles, "The finest level with at most T triangles");
+      cmd->add_option("--triangles", args->triangles,
+                      "A level within 10 % of T triangles: the finest with at most T, or, where that falls more than "
+                      "10 % short, the next when it has at most 10 % more");
+  CLI::Option* at_most = cmd->add_flag("--at-most", args->at_most, "With --triangles: never more than T triangles");
+  at_most->needs(triangles);
   CLI::Option* error = cmd->add_option("--error", args->error,
                                        "Clusters: the cut at this object-space error (model units)");
   CLI::Option* camera = cmd->add_option("--camera", args->camera,
@@ -99,7 +103,8 @@ void add_extract_command(CLI::App& app) {
       throw InputError("", "--fov must be in (0, 180), --height >= 1 and --pixel-error > 0");
     LevelRequest request;
     if (percent->count()) request = LevelRequest::at_percent(args->percent);
-    else if (triangles->count()) request = LevelRequest::at_triangles(args->triangles);
+    else if (triangles->count())
+      request = args->at_most ? LevelRequest::at_most_triangles(args->triangles) : LevelRequest::at_triangles(args->triangles);
     else if (error->count()) request = LevelRequest::at_error(args->error);
     else if (priority->count()) request = LevelRequest::at_priority(std::size_t(args->priority));
     else {

@@ -16,7 +16,7 @@ foreach(header
     core/parallel_jobs.h
     io/atomic_file.h io/gltf_file.h
     lod/lod_model.h lod/model_file.h lod/mc_octree.h lod/lod_array.h lod/extract.h lod/transition.h
-    lod/lod_cursor.h lod/cluster_hierarchy.h lod/cluster_cut.h
+    lod/lod_cursor.h lod/cluster_hierarchy.h lod/cluster_cut.h lod/level_budget.h
     reconstruct/marching_cubes.h reconstruct/signed_distance.h reconstruct/cube_grid.h reconstruct/cube_table.h)
   get_filename_component(folder ${header} DIRECTORY)
   install(FILES ${header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scan2lod/${folder})

@@ -1,5 +1,7 @@
 #include "lod/cluster_cut.h"
 
+#include "lod/level_budget.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -75,6 +77,16 @@ float error_for_triangles(const ClusterCutTable& table, std::int64_t budget) {
                                        [&](std::int64_t t) { return t > budget; });
   if (it == table.triangles.end()) return table.errors.back();
   return table.errors[std::size_t(it - table.triangles.begin())];
+}
+
+float error_for_budget(const ClusterCutTable& table, std::int64_t budget) {
+  const auto it = std::partition_point(table.triangles.begin(), table.triangles.end(),
+                                       [&](std::int64_t t) { return t > budget; });
+  const std::size_t i = std::size_t(it - table.triangles.begin());
+  const std::int64_t under = i < table.triangles.size() ? table.triangles[i] : -1;
+  const std::int64_t over = i > 0 ? table.triangles[i - 1] : -1;  // the fewest triangles above the budget
+  if (take_level_over(under, over, budget)) return table.errors[i - 1];
+  return i < table.triangles.size() ? table.errors[i] : table.errors.back();
 }
 
 void emit_clusters(const ClusterHierarchy& h, const std::vector<std::int32_t>& selected,

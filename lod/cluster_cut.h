@@ -51,6 +51,11 @@ ClusterCutTable cluster_cut_table(const ClusterHierarchy& h);
 // coarsest cut's when none has).
 float error_for_triangles(const ClusterCutTable& table, std::int64_t budget);
 
+// The threshold a triangle budget gets (lod/level_budget.h): error_for_triangles',
+// or, where its cut falls more than 10 % short of the budget, the next finer
+// cut's when that is at most 10 % over.
+float error_for_budget(const ClusterCutTable& table, std::int64_t budget);
+
 // Appends the selected clusters' triangles, in order.
 void emit_clusters(const ClusterHierarchy& h, const std::vector<std::int32_t>& selected,
                    std::vector<Triangle>* triangles);

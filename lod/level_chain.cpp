@@ -3,6 +3,7 @@
 #include "core/compact_mesh.h"
 #include "core/error.h"
 #include "core/mesh_edges.h"
+#include "lod/level_budget.h"
 
 #include <algorithm>
 #include <cmath>
@@ -31,11 +32,12 @@ const LevelCut& extract_level_to_deliver(LevelExtractor* extractor, const LevelR
   } catch (const InputError& e) {
     throw InputError(source, e.what());
   }
-  const bool over =
-      request.kind == LevelRequest::Kind::kTriangles && std::int64_t(cut->triangles.size()) > request.triangles;
+  const bool over = request.kind == LevelRequest::Kind::kTriangles &&
+                    std::int64_t(cut->triangles.size()) > budget_ceiling(request.triangles, request.strict);
   if (cut->triangles.empty() || over)
-    throw InputError(source, over ? "no level has at most " + std::to_string(request.triangles) +
-                                        " triangles; the coarsest level offered has " +
+    throw InputError(source, over ? "no level has at most " + std::to_string(request.triangles) + " triangles" +
+                                        (request.strict ? "" : ", nor up to 10 % more") +
+                                        "; the coarsest level offered has " +
                                         std::to_string(extractor->coarsest_triangles())
                                   : describe(request) + " has no triangles; ask for a finer one");
   return *cut;

@@ -1,6 +1,7 @@
 #include "lod/lod_array.h"
 
 #include "lod/extract.h"
+#include "lod/level_budget.h"
 
 #include <algorithm>
 #include <cmath>
@@ -133,6 +134,19 @@ std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles) 
   for (std::size_t i = 1; i < lod.pinned && lod.accumulated[i] <= triangles; ++i)
     if (lod.accumulated[i] >= record && lod.accumulated[i] >= lod.accumulated[best]) record = lod.accumulated[i], best = i;
   return best;
+}
+
+std::size_t priority_for_budget(const LodArray& lod, std::int64_t triangles) {
+  const std::size_t under = priority_for_triangles(lod, triangles);
+  const std::int64_t under_count = lod.accumulated[under] <= triangles ? lod.accumulated[under] : -1;
+  std::size_t over = under;
+  std::int64_t over_count = -1;
+  for (const std::size_t level : monotone_priorities(lod))
+    if (lod.accumulated[level] > triangles) {
+      over = level, over_count = lod.accumulated[level];
+      break;
+    }
+  return take_level_over(under_count, over_count, triangles) ? over : under;
 }
 
 }  // namespace scan2lod

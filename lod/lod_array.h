@@ -54,4 +54,9 @@ std::size_t priority_for_percent(const LodArray& lod, double percent);
 // fits, at the price of boundary loops near the rim that the full mesh lacks.
 std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles);
 
+// The offered level a triangle budget gets (lod/level_budget.h): the one
+// priority_for_triangles gives, or, where that falls more than 10 % short of
+// the budget, the next offered level when it is at most 10 % over.
+std::size_t priority_for_budget(const LodArray& lod, std::int64_t triangles);
+
 }  // namespace scan2lod

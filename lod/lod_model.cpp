@@ -87,6 +87,11 @@ LevelRequest LevelRequest::at_triangles(std::int64_t t) {
   r.triangles = t;
   return r;
 }
+LevelRequest LevelRequest::at_most_triangles(std::int64_t t) {
+  LevelRequest r = at_triangles(t);
+  r.strict = true;
+  return r;
+}
 LevelRequest LevelRequest::at_error(double e) {
   LevelRequest r = request_of(Kind::kError);
   r.error = e;
@@ -143,7 +148,8 @@ std::size_t LevelExtractor::octree_priority(const LevelRequest& request) const {
   using Kind = LevelRequest::Kind;
   switch (request.kind) {
     case Kind::kPercent: return priority_for_percent(lod, request.percent);
-    case Kind::kTriangles: return priority_for_triangles(lod, request.triangles);
+    case Kind::kTriangles:
+      return request.strict ? priority_for_triangles(lod, request.triangles) : priority_for_budget(lod, request.triangles);
     case Kind::kPriority:
       if (request.priority > lod.full())
         throw InputError("", "priority " + std::to_string(request.priority) + " is past the octree's " +
@@ -182,7 +188,8 @@ const LevelCut& LevelExtractor::extract(const LevelRequest& request) {
         break;
       }
       case Kind::kTriangles:
-        cut_.error = error_for_triangles(table_, request.triangles);
+        cut_.error = request.strict ? error_for_triangles(table_, request.triangles)
+                                    : error_for_budget(table_, request.triangles);
         select_clusters_by_error(h, float(cut_.error), &selected_);
         break;
       case Kind::kError:

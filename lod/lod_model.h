@@ -74,7 +74,10 @@ struct LevelRequest {
   enum class Kind { kPercent, kTriangles, kError, kCamera, kPriority };
   Kind kind = Kind::kPercent;
   double percent = 100;          // octree: of the LOD array; clusters: of the full triangle count
-  std::int64_t triangles = 0;    // the finest level with at most this many
+  // Within 10 % of this many (lod/level_budget.h); with `strict`, the finest
+  // level with at most this many.
+  std::int64_t triangles = 0;
+  bool strict = false;
   double error = 0;              // object-space error, in the model's units (clusters only)
   CameraView camera;             // with pixel_error (clusters only)
   double pixel_error = 1;
@@ -82,6 +85,7 @@ struct LevelRequest {
 
   static LevelRequest at_percent(double p);
   static LevelRequest at_triangles(std::int64_t t);
+  static LevelRequest at_most_triangles(std::int64_t t);  // strict
   static LevelRequest at_error(double e);
   static LevelRequest for_camera(const CameraView& c, double pixel_error);
   static LevelRequest at_priority(std::size_t p);

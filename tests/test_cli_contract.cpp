@@ -96,6 +96,29 @@ TEST(CliContract, AnEmptyLevelIsAnError) {
   EXPECT_FALSE(fs::exists(scratch() / "empty.glb"));
 }
 
+// --triangles T meets T within 10 %; --at-most makes it a cap. The bunny at
+// R = 64 has no octree level between 216 and 672 triangles.
+TEST(CliContract, ATriangleBudgetIsMetWithinTenPercentOrStrictly) {
+  const std::string model = testing::bunny_model().string();
+  const fs::path out = scratch() / "budget.ply";
+  auto triangles = [&](const std::string& args) {
+    const CliRun r = run_cli("extract " + model + " " + args + " --json -q -o " + out.string(), false);
+    EXPECT_EQ(exit_code(r), 0) << args << ": " << r.output;
+    return nlohmann::json::parse(r.output).at("triangles").get<long long>();
+  };
+  for (const std::string structure : {"octree", "clusters"})
+    for (const long long budget : {620LL, 1000LL, 3000LL}) {
+      const std::string ask = "--structure " + structure + " --triangles " + std::to_string(budget);
+      const long long strict = triangles(ask + " --at-most"), got = triangles(ask);
+      EXPECT_LE(strict, budget) << ask;
+      EXPECT_TRUE(got == strict || (10 * strict < 9 * budget && got > budget && 10 * got <= 11 * budget))
+          << ask << ": " << got << " (at most: " << strict << ")";
+      if (structure == "octree" && budget == 620) EXPECT_GT(got, budget) << "the level with the ears, 672";
+    }
+  const CliRun r = run_cli("extract " + model + " --at-most -o " + out.string());
+  EXPECT_EQ(exit_code(r), 2) << "--at-most needs --triangles: " << r.output;
+}
+
 TEST(CliContract, AnInputIsNeverOverwritten) {
   const fs::path dir = scratch() / "inputs";
   fs::create_directories(dir);

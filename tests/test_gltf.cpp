@@ -118,7 +118,7 @@ TEST(Gltf, OneLevelIsValidBinaryAndText) {
   float worst = 0;
   for (std::size_t i = 0; i < pq.size(); ++i) worst = std::max(worst, (pq[i] - pf[i]).cwiseAbs().maxCoeff());
   EXPECT_LE(worst, step * 0.51f);
-  EXPECT_LE(index_count(q, q.nodes[0]), 3u * 5000u);
+  EXPECT_LE(index_count(q, q.nodes[0]), 3u * 5500u) << "within 10 % of the budget";
   EXPECT_LT(fs::file_size(glb), fs::file_size(plain));
 }
 

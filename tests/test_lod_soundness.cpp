@@ -7,6 +7,7 @@
 #include "lod/lod_array.h"
 #include "lod/octree_order.h"
 #include "lod/lod_cursor.h"
+#include "lod/lod_model.h"
 #include "lod/mc_octree.h"
 #include "measure/topology.h"
 #include "reconstruct/marching_cubes.h"
@@ -59,7 +60,8 @@ std::size_t expect_sound_levels(const Built& b, std::size_t most, const char* na
 }
 
 // Levels start at or below 1 % of the full mesh; the `budgets` get levels
-// within 10 % of them.
+// within 10 % of them (lod/level_budget.h), and strictly at most them when
+// asked so.
 void expect_levels_all_the_way_down(const Built& b, const char* name, std::initializer_list<std::int64_t> budgets) {
   const std::vector<std::size_t> offered = monotone_priorities(b.lod);
   const std::int64_t full = b.lod.accumulated.back(), coarsest = b.lod.accumulated[offered.front()];
@@ -67,10 +69,14 @@ void expect_levels_all_the_way_down(const Built& b, const char* name, std::initi
               static_cast<long long>(coarsest));
   EXPECT_LE(coarsest, full / 100) << name;
   for (const std::int64_t budget : budgets) {
-    const std::int64_t got = b.lod.accumulated[priority_for_triangles(b.lod, budget)];
-    std::printf("%s: budget %lld -> %lld triangles\n", name, static_cast<long long>(budget), static_cast<long long>(got));
-    EXPECT_LE(got, budget) << name;
-    EXPECT_GE(got, budget * 9 / 10) << name << ", budget " << budget;
+    const std::int64_t under = b.lod.accumulated[priority_for_triangles(b.lod, budget)];
+    const std::int64_t got = b.lod.accumulated[priority_for_budget(b.lod, budget)];
+    std::printf("%s: budget %lld -> %lld triangles (at most: %lld)\n", name, static_cast<long long>(budget),
+                static_cast<long long>(got), static_cast<long long>(under));
+    EXPECT_LE(under, budget) << name;
+    EXPECT_TRUE(got == under || (10 * under < 9 * budget && got > budget)) << name << ", budget " << budget;
+    EXPECT_LE(10 * got, 11 * budget) << name << ", budget " << budget;
+    EXPECT_GE(10 * got, 9 * budget) << name << ", budget " << budget;
   }
 }
 
@@ -79,15 +85,24 @@ void expect_levels_all_the_way_down(const Built& b, const char* name, std::initi
 TEST(OctreeSoundness, EveryOfferedLevelOfTheBunnyAt64IsSound) {
   const Built b = build_octree_model(load_oriented_points({scan2lod::testing::bunny_scans()}), 64);
   EXPECT_EQ(expect_sound_levels(b, 1u << 30, "bunny R=64"), monotone_priorities(b.lod).size());
-  // At R = 64 the last step of the coarsening brings an ear back whole
-  // (216 to 666 triangles, no sound level between): 500 is not offered.
-  expect_levels_all_the_way_down(b, "bunny R=64", {1000, 2000});
+  // At R = 64 the last step of the coarsening brings the ears back whole
+  // (216 to 672 triangles, no sound level between): nothing is within 10 %
+  // of 500, and 620 gets the level over it.
+  expect_levels_all_the_way_down(b, "bunny R=64", {620, 1000, 2000});
 }
 
 TEST(OctreeSoundness, ABunnyAt128IsSoundAtAThousandLevels) {
   const Built b = build_octree_model(load_oriented_points({scan2lod::testing::bunny_scans()}), 128);
   EXPECT_GE(expect_sound_levels(b, 1000, "bunny R=128"), 1000u);
   expect_levels_all_the_way_down(b, "bunny R=128", {500, 1000, 2000, 5000});
+  // The LOD face asks the same: a budget within 10 %, or strictly at most.
+  const LodModel model = model_from_octree(b.tree, b.lod);
+  LevelExtractor extractor(model, LodStructure::kOctree);
+  for (const std::int64_t budget : {300, 500, 700, 1000, 2000, 5000}) {
+    EXPECT_EQ(extractor.extract(LevelRequest::at_triangles(budget)).priority, priority_for_budget(b.lod, budget));
+    EXPECT_EQ(extractor.extract(LevelRequest::at_most_triangles(budget)).priority,
+              priority_for_triangles(b.lod, budget));
+  }
 }
 
 TEST(OctreeSoundness, ClosedShapesStayClosedAndWholeAtEveryOfferedLevel) {

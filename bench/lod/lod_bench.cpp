@@ -1355,7 +1355,7 @@ int main(int argc, char** argv) {
       if (b != 0) {
         const int threads = omp_get_max_threads();
         omp_set_num_threads(1);  // extract_lod: no OpenMP team in the parent
-        const LevelCut& o = octree.extract(LevelRequest::at_triangles(l.triangles));
+        const LevelCut& o = octree.extract(LevelRequest::at_most_triangles(l.triangles));
         l.octree_triangles = std::int64_t(o.triangles.size());
         l.octree_mesh = compact_level(model, o.triangles);
         omp_set_num_threads(threads);
