@@ -19,6 +19,7 @@ struct Tables {
   std::array<bool, 6> face_reversed{};                        // side 0 faces wind the other way
   std::array<std::array<std::int8_t, 4>, 6> face_edges{};     // node edges around each face, CCW from (0,0)
   std::array<std::int8_t, 61> slot_line{};  // the node edge whose line holds a slot's crossing, or -1
+  std::array<std::uint8_t, 61> slot_faces{};  // bit axis*2+side: the node faces holding a slot's crossing
 
   Tables() {
     for (auto& row : sub_edge_of) row.fill(-1);
@@ -85,6 +86,19 @@ struct Tables {
       slot_line[std::size_t(k)] = edge_of[lattice(lo[0], lo[1], lo[2])][lattice(hi[0], hi[1], hi[2])];
     }
     for (int e = 0; e < 12; ++e) slot_line[std::size_t(kSubEdges + e)] = std::int8_t(e);
+    // A crossing lies on the faces both ends of its (sub-)edge lie on.
+    auto faces_of = [](int p) {
+      const int c[3] = {p % 3, p / 3 % 3, p / 9};
+      std::uint8_t bits = 0;
+      for (int axis = 0; axis < 3; ++axis)
+        if (c[axis] != 1) bits |= std::uint8_t(1u << (axis * 2 + c[axis] / 2));
+      return bits;
+    };
+    for (int k = 0; k < kSubEdges; ++k)
+      slot_faces[std::size_t(k)] = faces_of(sub_edges[std::size_t(k)].a) & faces_of(sub_edges[std::size_t(k)].b);
+    for (int e = 0; e < 12; ++e)
+      slot_faces[std::size_t(kSubEdges + e)] =
+          faces_of(lattice_of_corner(edge_corner(e, 0))) & faces_of(lattice_of_corner(edge_corner(e, 1)));
   }
 };
 
@@ -221,14 +235,25 @@ void transition_slots(const TransitionInput& in, SlotTriangles* result) {
     if (loop_first[l + 1] - loop_first[l] > 3 &&
         (centred < 0 || loop_first[l + 1] - loop_first[l] > loop_first[centred + 1] - loop_first[centred]))
       centred = l;
+  // Better still, no fan triangle lies on one node face: its three
+  // crossings then lie where that face's plane meets the surface, on one line
+  // wherever the surface is flat (a box face parallel to the lattice gave
+  // triangles of no area at all).
   auto apex_of = [&](const int* loop, int m) {
+    int fallback = -1;
     for (int k = 0; k < m; ++k) {
       bool clear = true;
       const int line = T.slot_line[std::size_t(loop[k])];
       for (int j = 2; j + 1 < m && clear && line >= 0; ++j) clear = T.slot_line[std::size_t(loop[(k + j) % m])] != line;
-      if (clear) return k;
+      if (!clear) continue;
+      bool flat = false;
+      for (int j = 1; j + 1 < m && !flat; ++j)
+        flat = (T.slot_faces[std::size_t(loop[k])] & T.slot_faces[std::size_t(loop[(k + j) % m])] &
+                T.slot_faces[std::size_t(loop[(k + j + 1) % m])]) != 0;
+      if (!flat) return k;
+      if (fallback < 0) fallback = k;
     }
-    return -1;
+    return fallback;
   };
   for (int l = 0; l < loop_count; ++l) {
     const int* loop = loops + loop_first[l];
