@@ -278,6 +278,30 @@ def lod_section(report):
     return out, model_text, sorted(unfinished)
 
 
+def budget_section(report):
+    """The octree at `--triangles` budgets against the vertex-clustering peers
+    at its count, from the tables under '### budget 1k (`--triangles`): T triangles'."""
+    clustering = ["meshopt_simplifySloppy", "Open3D VertexClustering", "VTK QuadricClustering"]
+    out = []
+    for heading, header, rows in report.tables():
+        level = re.match(r"budget (\d+k) \(`--triangles`\): (\d+) triangles", heading)
+        if not level or header[:4] != ["method", "kind", "triangles", "seconds (median, range)"]:
+            continue
+        table = {plain(r[0]): dict(zip(header, r)) for r in rows}
+        own = next((r for name, r in table.items() if "scan2lod" in name), None)
+        own_error = number(own["error (1e-3 diag)"]) if own else None
+        if own_error is None:
+            continue
+        cells_out = []
+        for name in clustering:
+            r = table.get(name)
+            e = number(r["error (1e-3 diag)"]) if r else None
+            t = number(r["triangles"]) if r else None
+            cells_out.append("—" if e is None else f"{e:.4f}" + (f" [{t:.0f}]" if t and abs(t - float(level.group(2))) > 0.01 * float(level.group(2)) else "") + f" ({error_ratio(own_error, e)})")
+        out.append(f"| {level.group(1)} | {level.group(2)} | {own_error:.4f} | " + " | ".join(cells_out) + " |")
+    return out
+
+
 def cluster_section(report):
     """The cluster hierarchy's uniform cuts against meshopt_simplify and the
     best peer, from the table under 'Cluster hierarchy beside the octree', and
@@ -349,6 +373,17 @@ def summary(reconstruction_path, lod_path):
             "|---:|---:|---:|---|---|---:|---|---|"]
     out += lod_rows
     out.append("")
+    budget_rows = budget_section(lod)
+    if budget_rows:
+        out += ["The octree's coarse end as `--triangles` gives it, against the vertex-clustering peers at its "
+                "count (error as above; a peer's count in brackets where it is more than 1 % off; in parentheses "
+                "the octree's error against it):",
+                "",
+                "| budget | triangles | octree error | meshopt_simplifySloppy | Open3D VertexClustering "
+                "| VTK QuadricClustering |",
+                "|---:|---:|---:|---|---|---|"]
+        out += budget_rows
+        out.append("")
     cluster_rows, cluster_line = cluster_section(lod)
     if cluster_rows:
         out += ["The cluster hierarchy's uniform cuts at triangle budgets, against `meshopt_simplify` and the most "
