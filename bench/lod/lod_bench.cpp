@@ -1317,11 +1317,10 @@ int main(int argc, char** argv) {
     omp_set_num_threads(1);
     const LodArray& lod = model.octree->lod;
     LevelExtractor octree(model, LodStructure::kOctree);
-    for (const double p : percents) {
-      Level l;
-      l.percent = p;
-      const LevelCut& cut = octree.extract(LevelRequest::at_percent(p));
+    auto take = [&](Level l, const LevelRequest& request) {
+      const LevelCut& cut = octree.extract(request);
       l.priority = cut.priority;
+      if (l.budget > 0) l.percent = cut.percent;
       l.triangles = std::int64_t(cut.triangles.size());
       l.accumulated = lod.accumulated[l.priority];
       l.mesh = compact_level(model, cut.triangles);
@@ -1329,20 +1328,17 @@ int main(int argc, char** argv) {
       l.topology = mesh_topology(l.mesh);
       if (l.priority == lod.full()) full = l.mesh, octree_full = cut.triangles;
       levels.push_back(std::move(l));
+    };
+    for (const double p : percents) {
+      Level l;
+      l.percent = p;
+      take(std::move(l), LevelRequest::at_percent(p));
     }
     for (const std::int64_t b : budgets) {
       if (b * 2 >= lod.accumulated.back()) continue;
       Level l;
       l.budget = b;
-      const LevelCut& cut = octree.extract(LevelRequest::at_triangles(b));
-      l.priority = cut.priority;
-      l.percent = cut.percent;
-      l.triangles = std::int64_t(cut.triangles.size());
-      l.accumulated = lod.accumulated[l.priority];
-      l.mesh = compact_level(model, cut.triangles);
-      l.vertices = l.mesh.positions.size();
-      l.topology = mesh_topology(l.mesh);
-      levels.push_back(std::move(l));
+      take(std::move(l), LevelRequest::at_triangles(b));
     }
     if (full.triangles.empty()) {
       octree_full = octree.extract(LevelRequest::at_priority(lod.full())).triangles;
