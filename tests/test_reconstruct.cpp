@@ -191,6 +191,39 @@ TEST(Reconstruct, RejectsBadPoints) {
   EXPECT_THROW(reconstruct(sphere_points(1.f, 100), bad), std::runtime_error);
 }
 
+TEST(HoleFilling, NoFlatTriangleWhereTheRimRunsStraight) {
+  // A flat 4 x 4 grid of unit squares without its middle 2 x 2: the hole's
+  // rim has 8 vertices, three on each side of it, as a marching-cubes rim
+  // along lattice lines has. Every triangulation of it has the same area, and
+  // some take three vertices of one side (no area): those must not be chosen.
+  TriangleMesh mesh;
+  for (int y = 0; y <= 4; ++y)
+    for (int x = 0; x <= 4; ++x) mesh.positions.push_back(Vec3f(float(x), float(y), 0.f));
+  auto id = [](int x, int y) { return std::int32_t(y * 5 + x); };
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      if (x >= 1 && x <= 2 && y >= 1 && y <= 2) continue;
+      mesh.triangles.push_back({id(x, y), id(x + 1, y), id(x + 1, y + 1)});
+      mesh.triangles.push_back({id(x, y), id(x + 1, y + 1), id(x, y + 1)});
+    }
+  ASSERT_EQ(mesh_topology(mesh).boundary_loops, 2u);
+  const std::vector<Triangle> patch = fill_small_holes(mesh, 8);  // the outer rim has 16 edges
+  ASSERT_EQ(patch.size(), 6u);
+  double area = 0.0;
+  for (const Triangle& t : patch) {
+    const Vec3f& a = mesh.positions[t[0]];
+    const Vec3f n = (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a);
+    EXPECT_GT(n.z(), 0.f) << "a patch triangle of no area or facing down";
+    area += 0.5 * double(n.norm());
+  }
+  EXPECT_NEAR(area, 4.0, 1e-6);
+  mesh.triangles.insert(mesh.triangles.end(), patch.begin(), patch.end());
+  const MeshTopology after = mesh_topology(mesh);
+  EXPECT_EQ(after.boundary_loops, 1u);
+  EXPECT_EQ(after.non_manifold_edges, 0u);
+  EXPECT_EQ(after.degenerate_triangles, 0u);
+}
+
 TEST(HoleFilling, ClosesSmallHolesKeepsLargeOnesAndOrientsPatches) {
   // A marching-cubes sphere with two holes cut out: a small cap and a big band.
   ReconstructOptions options;
