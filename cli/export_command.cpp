@@ -118,6 +118,8 @@ void add_export_command(CLI::App& app) {
     options.screen_height = args->height;
     const LevelChain chain = extract_chain(model, structure, requests, args->model, options);
     const double extract_seconds = seconds_since(start);
+    for (const ChainLevel& l : chain.levels)
+      if (!l.shortfall.empty()) warn(l.shortfall);
 
     start = std::chrono::steady_clock::now();
     if (gltf) {

@@ -122,6 +122,7 @@ void add_extract_command(CLI::App& app) {
         model, args->structure.empty() && priority->count() ? std::string("octree") : args->structure, args->model);
     LevelExtractor extractor(model, structure);
     const LevelCut& cut = extract_level_to_deliver(&extractor, request, args->model);
+    if (const std::string shortfall = budget_shortfall(extractor, request, cut); !shortfall.empty()) warn(shortfall);
     const auto start = std::chrono::steady_clock::now();
     const TriangleMesh mesh = compact_level(model, cut.triangles);
     const double compact_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

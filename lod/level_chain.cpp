@@ -43,6 +43,34 @@ const LevelCut& extract_level_to_deliver(LevelExtractor* extractor, const LevelR
   return *cut;
 }
 
+std::string budget_shortfall(const LevelExtractor& extractor, const LevelRequest& request, const LevelCut& cut) {
+  if (request.kind != LevelRequest::Kind::kTriangles || request.triangles <= 0) return "";
+  const double budget = double(request.triangles), got = double(cut.triangles.size());
+  if (std::abs(got - budget) <= kBudgetTolerance * budget) return "";
+  const auto [under, over] = extractor.offered_around(request.triangles);
+  const bool octree = extractor.structure() == LodStructure::kOctree;
+  std::string text = std::string("no ") + (octree ? "octree" : "cluster-hierarchy") + " level is within 10 % of " +
+                     std::to_string(request.triangles) + " triangles: ";
+  if (under >= 0 && over >= 0)
+    text += "the offered levels step from " + std::to_string(under) + " to " + std::to_string(over) + " there";
+  else if (under >= 0)
+    text += "the finest offered level has " + std::to_string(under);
+  else
+    text += "the coarsest offered level has " + std::to_string(over);
+  text += "; took the one with " + std::to_string(cut.triangles.size());
+  // Point to the other structure only where it does meet the budget.
+  if (octree && extractor.model().has(LodStructure::kClusters)) {
+    const auto [cut_under, cut_over] =
+        LevelExtractor(extractor.model(), LodStructure::kClusters).offered_around(request.triangles);
+    for (const std::int64_t count : {cut_under, cut_over})
+      if (count >= 0 && std::abs(double(count) - budget) <= kBudgetTolerance * budget) {
+        text += " (the cluster hierarchy has a cut of " + std::to_string(count) + ": --structure clusters)";
+        break;
+      }
+  }
+  return text;
+}
+
 LevelChain extract_chain(const LodModel& model, LodStructure structure, const std::vector<LevelRequest>& requests,
                          const std::string& source, const ChainOptions& options) {
   LevelExtractor extractor(model, structure);
@@ -51,6 +79,7 @@ LevelChain extract_chain(const LodModel& model, LodStructure structure, const st
   for (const LevelRequest& request : requests) {
     ChainLevel level;
     level.cut = extract_level_to_deliver(&extractor, request, source);
+    level.shortfall = budget_shortfall(extractor, request, level.cut);
     level.error = structure == LodStructure::kClusters ? level.cut.error
                                                         : 0.25 * mean_edge_length(model.vertices.positions,
                                                                                   level.cut.triangles);

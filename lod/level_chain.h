@@ -30,6 +30,7 @@ struct ChainLevel {
   LevelCut cut;                  // triangles index LevelChain::vertices
   double error = 0;              // e: the error bound, or the octree's stand-in
   double screen_coverage = 0;    // drawn from this screen share up (0 for the coarsest)
+  std::string shortfall;         // budget_shortfall's sentence, or empty
 };
 
 struct LevelChain {
@@ -44,6 +45,11 @@ struct LevelChain {
 // (which the extractor answers with that coarsest level).
 const LevelCut& extract_level_to_deliver(LevelExtractor* extractor, const LevelRequest& request,
                                          const std::string& source);
+
+// Where `cut` answered a triangle budget that no offered level meets within
+// 10 % (one structure's levels step over it): a sentence saying so, with the
+// levels on either side and the one taken; empty otherwise.
+std::string budget_shortfall(const LevelExtractor& extractor, const LevelRequest& request, const LevelCut& cut);
 
 // Takes `requests` from `structure` of `model`, orders them finest first and
 // compacts the vertices they use. Throws InputError (naming `source`) for a

@@ -125,6 +125,21 @@ std::int64_t LevelExtractor::coarsest_triangles() const {
   return lod.accumulated[priority_for_percent(lod, 0)];
 }
 
+std::pair<std::int64_t, std::int64_t> LevelExtractor::offered_around(std::int64_t triangles) const {
+  std::int64_t under = -1, over = -1;
+  auto see = [&](std::int64_t count) {
+    if (count <= triangles) under = std::max(under, count);
+    else if (over < 0 || count < over) over = count;
+  };
+  if (structure_ == LodStructure::kClusters) {
+    for (const std::int64_t count : table_.triangles) see(count);
+  } else {
+    const LodArray& lod = model_->octree->lod;
+    for (const std::size_t p : monotone_priorities(lod)) see(lod.accumulated[p]);
+  }
+  return {under, over};
+}
+
 int LevelExtractor::levels() const {
   return structure_ == LodStructure::kClusters ? model_->clusters->levels() : model_->octree->tree.depth + 1;
 }

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace scan2lod {
@@ -122,6 +123,10 @@ class LevelExtractor {
   std::int64_t full_triangles() const;
   // Triangles of the coarsest level offered.
   std::int64_t coarsest_triangles() const;
+  // The offered levels nearest a triangle count: the most triangles at or
+  // under `triangles` and the fewest over it (-1 where there is none). Where
+  // both are more than kBudgetTolerance away, no level meets that budget.
+  std::pair<std::int64_t, std::int64_t> offered_around(std::int64_t triangles) const;
   // Per triangle of the last cut, its cluster's DAG level (clusters; 0 at full
   // detail), or 0 for the octree: what views colour by.
   std::vector<std::uint8_t> triangle_levels() const;

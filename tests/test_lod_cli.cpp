@@ -2,6 +2,9 @@
 // built from the bundled bunny reports its levels, extraction gives the mesh
 // sizes info promised, and bad input ends in a clear error and no file.
 #include "io/mesh_file.h"
+#include "lod/lod_array.h"
+#include "lod/lod_model.h"
+#include "lod/model_file.h"
 
 #include "test_support.h"
 
@@ -9,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -128,6 +132,55 @@ TEST(LodCli, InfoAndExtractAgreeOnTheBunny) {
   ASSERT_EQ(table.status, 0) << table.output;
   EXPECT_NE(table.output.find("LOD %"), std::string::npos) << table.output;
   EXPECT_NE(table.output.find(std::to_string(full)), std::string::npos) << table.output;
+}
+
+// A budget that falls inside one of the octree's steps gets the nearest level
+// below it and a warning that names the step;
+// a budget an offered level meets gets no warning; --quiet silences it.
+TEST(LodCli, ABudgetNoLevelMeetsIsReported) {
+  const fs::path& model = bunny_model();
+  ASSERT_TRUE(fs::exists(model));
+  const scan2lod::LodModel loaded = scan2lod::load_model(model.string());
+  const scan2lod::LodArray& lod = loaded.octree->lod;
+  // The largest relative step between offered levels (the R = 64 bunny's
+  // ears come in one step, 216 -> 672 triangles).
+  std::int64_t under = 0, over = 0;
+  std::int64_t previous = -1;
+  for (const std::size_t p : scan2lod::monotone_priorities(lod)) {
+    const std::int64_t count = lod.accumulated[p];
+    if (previous > 0 && (over == 0 || double(count) / double(previous) > double(over) / double(under)))
+      under = previous, over = count;
+    previous = count;
+  }
+  ASSERT_GT(double(over) / double(under), 1.1 / 0.9) << "no step a budget could fall into: " << under << " -> " << over;
+  const std::int64_t budget = std::int64_t(std::sqrt(double(under) * double(over)));  // > 10 % from both
+  const std::string out = (scratch() / "step.ply").string();
+  const CliRun r = run_cli("extract " + model.string() + " --structure octree --triangles " + std::to_string(budget) +
+                           " -o " + out);
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const std::string& word : std::vector<std::string>{
+           "warning", "within 10 % of " + std::to_string(budget) + " triangles",
+           "from " + std::to_string(under) + " to " + std::to_string(over), "took the one with " + std::to_string(under)})
+    EXPECT_NE(r.output.find(word), std::string::npos) << word << " missing from: " << r.output;
+  EXPECT_EQ(scan2lod::read_mesh(out).triangles.size(), std::size_t(under));
+  const CliRun quiet = run_cli("extract " + model.string() + " --structure octree --triangles " +
+                               std::to_string(budget) + " -o " + out + " -q");
+  ASSERT_EQ(quiet.status, 0) << quiet.output;
+  EXPECT_EQ(quiet.output, "");
+  // export says it per level too.
+  const CliRun chain = run_cli("export " + model.string() + " --structure octree --triangles " +
+                               std::to_string(budget) + "," + std::to_string(over) + " -o " +
+                               (scratch() / "step.glb").string());
+  ASSERT_EQ(chain.status, 0) << chain.output;
+  std::size_t warnings = 0;
+  for (std::size_t at = chain.output.find("warning"); at != std::string::npos; at = chain.output.find("warning", at + 1))
+    ++warnings;
+  EXPECT_EQ(warnings, 1u) << chain.output;
+  // A budget an offered level has exactly: no warning.
+  const CliRun exact = run_cli("extract " + model.string() + " --structure octree --triangles " +
+                               std::to_string(over) + " -o " + out);
+  ASSERT_EQ(exact.status, 0) << exact.output;
+  EXPECT_EQ(exact.output.find("warning"), std::string::npos) << exact.output;
 }
 
 // The cluster hierarchy through the command line: the full cut is the
