@@ -26,6 +26,13 @@ inline bool take_level_over(std::int64_t under, std::int64_t over, std::int64_t 
   return double(under) < (1.0 - kBudgetTolerance) * b && double(over) <= (1.0 + kBudgetTolerance) * b;
 }
 
+// Whether a level of `count` triangles meets `budget`: within kBudgetTolerance
+// of it, either way.
+inline bool meets_budget(std::int64_t count, std::int64_t budget) {
+  const double b = double(budget), c = double(count);
+  return c >= (1.0 - kBudgetTolerance) * b && c <= (1.0 + kBudgetTolerance) * b;
+}
+
 // The largest count a level picked for `budget` may have (strict: the budget).
 inline std::int64_t budget_ceiling(std::int64_t budget, bool strict) {
   return strict ? budget : std::int64_t(double(budget) * (1.0 + kBudgetTolerance));

@@ -45,8 +45,7 @@ const LevelCut& extract_level_to_deliver(LevelExtractor* extractor, const LevelR
 
 std::string budget_shortfall(const LevelExtractor& extractor, const LevelRequest& request, const LevelCut& cut) {
   if (request.kind != LevelRequest::Kind::kTriangles || request.triangles <= 0) return "";
-  const double budget = double(request.triangles), got = double(cut.triangles.size());
-  if (std::abs(got - budget) <= kBudgetTolerance * budget) return "";
+  if (meets_budget(std::int64_t(cut.triangles.size()), request.triangles)) return "";
   const auto [under, over] = extractor.offered_around(request.triangles);
   const bool octree = extractor.structure() == LodStructure::kOctree;
   std::string text = std::string("no ") + (octree ? "octree" : "cluster-hierarchy") + " level is within 10 % of " +
@@ -63,7 +62,7 @@ std::string budget_shortfall(const LevelExtractor& extractor, const LevelRequest
     const auto [cut_under, cut_over] =
         LevelExtractor(extractor.model(), LodStructure::kClusters).offered_around(request.triangles);
     for (const std::int64_t count : {cut_under, cut_over})
-      if (count >= 0 && std::abs(double(count) - budget) <= kBudgetTolerance * budget) {
+      if (count >= 0 && meets_budget(count, request.triangles)) {
         text += " (the cluster hierarchy has a cut of " + std::to_string(count) + ": --structure clusters)";
         break;
       }
