@@ -52,7 +52,8 @@ bool transition_of(const McOctree& tree, std::int32_t node, const std::vector<st
   const std::uint16_t edges = std::uint16_t(splits & 0xfff);
   const std::uint8_t faces = std::uint8_t(splits >> 12);
   *in = TransitionInput{tree.transitions.boundary_inside[node], tree.nodes.edge_vertices[node].data(),
-                        tree.transitions.sub_edge_vertices[node].data(), tree.transitions.centre_vertices[node], faces, edges};
+                        tree.transitions.sub_edge_vertices[node].data(), tree.transitions.centre_vertices[node], faces, edges,
+                        tree.transitions.straight_faces[node]};
   return true;
 }
 

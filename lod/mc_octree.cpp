@@ -113,6 +113,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   compute_metrics(options.metric, sums, &tree);
   group_patches(leaves.patch_triangles, &tree);
   centre_vertices(sums, &tree);
+  find_straight_faces(tree.vertices.positions, &tree);
   return tree;
 }
 

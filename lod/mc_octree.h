@@ -63,6 +63,9 @@ struct OctreeTransitions {
   LargeArray<std::array<std::int32_t, kSubEdges>> sub_edge_vertices;
   LargeArray<std::int32_t> centre_vertices;  // -1 where nothing crosses the node's boundary
   LargeArray<std::array<std::int32_t, 27>> neighbours;  // node in each cell around (13: itself), or -1
+  // Bit axis*2+side: the node's crossings on that face include three in line
+  // (lod/transition.h's straight_faces), found once their positions are final.
+  LargeArray<std::uint8_t> straight_faces;
 
   std::size_t size() const { return centre_vertices.size(); }
 };

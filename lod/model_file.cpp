@@ -178,6 +178,8 @@ const SectionSpec kSections[] = {
     {"PINC", Part::kOctree, false, [](LodModel&, Records& r) { return record(&r.pinned, 8); }},
     // 4.1, optional: older readers offer levels inside the coarsening's steps.
     {"STEP", Part::kOctree, false, [](LodModel& m, Records&) { return array(m.octree->lod.inside_steps); }},
+    // 4.2, optional: older files were counted without it (all zero).
+    {"STRF", Part::kOctree, false, [](LodModel& m, Records&) { return array(transitions_of(m).straight_faces); }},
     {"CINF", Part::kClusters, true, [](LodModel&, Records& r) { return record(r.cluster_info, 24); }, 3},
     {"CLUS", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->clusters); }, 3},
     {"CTRI", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->triangles); }, 3},
@@ -726,6 +728,7 @@ void Decoder::check_transitions(const McOctree& t, std::size_t internal) const {
   per_internal("BINS", t.transitions.boundary_inside.size());
   per_internal("SUBV", t.transitions.sub_edge_vertices.size());
   per_internal("NBRS", t.transitions.neighbours.size());
+  per_internal("STRF", t.transitions.straight_faces.size());
   const auto& sub_edges = transition_sub_edges();
   auto vertex_ok = [&](std::int32_t v) { return v >= -1 && (v < 0 || std::size_t(v) < vertices); };
   int corner_point[8], edge_ends[12][2];
@@ -755,6 +758,7 @@ void Decoder::check_transitions(const McOctree& t, std::size_t internal) const {
         if (v < 0) bad(node() + "sub-edge " + std::to_string(e) + " changes sign without a vertex");
       }
     }
+    if (t.transitions.straight_faces[i] >> 6) bad(node() + "straight faces beyond the 6 faces");
     const std::int32_t centre = t.transitions.centre_vertices[i];
     if (!vertex_ok(centre) || (crossing && centre < 0))
       bad(node() + "centre vertex " + std::to_string(centre) + " of " + std::to_string(vertices));
@@ -815,6 +819,7 @@ LodModel Decoder::decode() {
   read_part(Part::kOctree, &model);
   if (major_ >= kPacked) unpack_octree(records_.packed, source_, &t);
   read_pinned(&model.octree->lod);
+  if (!by_tag_.count(fourcc("STRF"))) t.transitions.straight_faces.assign(t.transitions.size(), 0);
   check_octree_arrays(t);
   const std::size_t internal = check_nodes(t);
   check_transitions(t, internal);

@@ -74,6 +74,11 @@
 // coarsening's steps, lod/coarsening.h, which may be unsound; a 4.1 reader of
 // an older file offers every level past the pinned prefix):
 //   STEP i32, ascending        LodArray::inside_steps, priority numbers not offered
+// Added in 4.2, optional (a 4.1 reader skips it and may fan a transition loop
+// into a triangle of no area where a flat surface meets a node face in line,
+// lod/transition.h; a 4.2 reader of an older file takes all zero, as that
+// file's LODA was counted):
+//   STRF u8 per internal node  OctreeTransitions::straight_faces
 // Every section is listed once, in kSections (model_file.cpp), with the
 // formats that hold it: the writer and the reader both walk that table. A new
 // array is a new row there (and, if it must agree with others, a check in the
@@ -92,7 +97,7 @@
 namespace scan2lod {
 
 constexpr std::uint32_t kModelFormatMajor = 4;
-constexpr std::uint32_t kModelFormatMinor = 1;
+constexpr std::uint32_t kModelFormatMinor = 2;
 
 // Writes `model` to `path` (extension .mco) through a temporary file renamed
 // into place (write_atomically): a failure leaves nothing under `path`.

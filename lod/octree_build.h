@@ -19,11 +19,14 @@
 //  10. patch groups      the leaves' hole patches grouped by hole (octree_patches.cpp)
 //  11. centre vertices   one per internal node for its transition fans, fitted
 //                        and unfolded (octree_centres.cpp)
+//  12. straight faces    the node faces whose crossings include three in line,
+//                        which the fans avoid (octree_straight_faces.cpp)
 //
 // Internal to lod/: the build's files include it, and the model file's
 // unpacking (lod/model_pack.cpp), which finds neighbours again as phase 5 does.
 #pragma once
 
+#include "core/array_view.h"
 #include "core/flat_hash.h"
 #include "lod/mc_octree.h"
 #include "reconstruct/mesh_field.h"
@@ -234,6 +237,7 @@ void transition_data(const LevelBegin& level_begin, const std::vector<std::uint8
 // (octree_keys.cpp).
 void find_neighbours(std::int32_t node, McOctree* tree);
 
+
 // ---- 6. jump vertices (octree_jumps.cpp) -----------------------------------
 
 // Moves each vertex of `jumps` (EdgeResolver::jumps) to within half a leaf
@@ -292,6 +296,12 @@ void group_patches(const std::vector<Triangle>& patches, McOctree* tree);
 // mean of its own crossings (of its boundary's where it has none), fitted to
 // the leaves' planes below and moved where its fans would fold.
 void centre_vertices(const std::vector<LeafSums>& sums, McOctree* tree);
+
+// ---- 12. straight faces (octree_straight_faces.cpp) ------------------------
+
+// Every internal node's straight faces (OctreeTransitions::straight_faces),
+// from the vertices' final positions.
+void find_straight_faces(ArrayView<Vec3f> positions, McOctree* tree);
 
 }  // namespace octree_build
 }  // namespace scan2lod

@@ -3,6 +3,8 @@
 #include "core/flat_hash.h"
 #include "reconstruct/cube_table.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cstring>
 
@@ -238,7 +240,10 @@ void transition_slots(const TransitionInput& in, SlotTriangles* result) {
   // Better still, no fan triangle lies on one node face: its three
   // crossings then lie where that face's plane meets the surface, on one line
   // wherever the surface is flat (a box face parallel to the lattice gave
-  // triangles of no area at all).
+  // triangles of no area at all). Where every apex has such a triangle, one
+  // whose triangles lie on faces whose crossings are not in line
+  // (straight_faces) is taken; failing that, the centre, as for a loop
+  // without a clear crossing.
   auto apex_of = [&](const int* loop, int m) {
     int fallback = -1;
     for (int k = 0; k < m; ++k) {
@@ -246,12 +251,12 @@ void transition_slots(const TransitionInput& in, SlotTriangles* result) {
       const int line = T.slot_line[std::size_t(loop[k])];
       for (int j = 2; j + 1 < m && clear && line >= 0; ++j) clear = T.slot_line[std::size_t(loop[(k + j) % m])] != line;
       if (!clear) continue;
-      bool flat = false;
-      for (int j = 1; j + 1 < m && !flat; ++j)
-        flat = (T.slot_faces[std::size_t(loop[k])] & T.slot_faces[std::size_t(loop[(k + j) % m])] &
-                T.slot_faces[std::size_t(loop[(k + j + 1) % m])]) != 0;
+      std::uint8_t flat = 0;  // the faces that hold a fan triangle whole
+      for (int j = 1; j + 1 < m; ++j)
+        flat |= T.slot_faces[std::size_t(loop[k])] & T.slot_faces[std::size_t(loop[(k + j) % m])] &
+                T.slot_faces[std::size_t(loop[(k + j + 1) % m])];
       if (!flat) return k;
-      if (fallback < 0) fallback = k;
+      if (fallback < 0 && !(flat & in.straight_faces)) fallback = k;
     }
     return fallback;
   };
@@ -312,7 +317,7 @@ thread_local Memo memo;
 
 std::uint64_t memo_key(const TransitionInput& in) {
   return std::uint64_t(in.inside & used_points(in)) | std::uint64_t(in.fine_faces & 63) << 27 |
-         std::uint64_t(in.split_edges & 4095) << 33;
+         std::uint64_t(in.split_edges & 4095) << 33 | std::uint64_t(in.straight_faces & 63) << 45;
 }
 
 const std::uint8_t* cached_slots(const TransitionInput& in) {
@@ -332,6 +337,57 @@ const std::uint8_t* cached_slots(const TransitionInput& in) {
 }
 
 }  // namespace
+
+std::uint8_t straight_faces(const std::int32_t* edge_vertices, const std::int32_t* sub_edge_vertices,
+                            const Vec3f* positions) {
+  const Tables& T = tables();
+  // Crossings one triangulation can hold together: a whole node edge's is
+  // never beside its halves' (the edge is split or not), nor beside those
+  // inside a face (a finer face splits its edges).
+  auto together = [&](int s, int t) {
+    if (s > t) std::swap(s, t);
+    if (t < kSubEdges || s >= kSubEdges) return true;
+    return T.slot_line[std::size_t(s)] >= 0 && T.slot_line[std::size_t(s)] != T.slot_line[std::size_t(t)];
+  };
+  static const auto on_face = [] {  // bit slot: the slot's crossing lies on face f
+    std::array<std::uint64_t, 6> masks{};
+    for (int slot = 0; slot < kCentreSlot; ++slot)
+      for (int f = 0; f < 6; ++f)
+        if ((tables().slot_faces[std::size_t(slot)] >> f) & 1) masks[std::size_t(f)] |= std::uint64_t(1) << slot;
+    return masks;
+  }();
+  auto vertex = [&](int slot) { return slot < kSubEdges ? sub_edge_vertices[slot] : edge_vertices[slot - kSubEdges]; };
+  std::uint64_t present = 0;
+  for (int slot = 0; slot < kCentreSlot; ++slot) present |= std::uint64_t(vertex(slot) >= 0) << slot;
+  std::uint8_t straight = 0;
+  for (int f = 0; f < 6; ++f) {
+    std::uint64_t here = present & on_face[std::size_t(f)];
+    if (__builtin_popcountll(here) < 3) continue;
+    int slots[kCentreSlot];
+    Eigen::Vector3d at[kCentreSlot];
+    int count = 0;
+    for (; here; here &= here - 1, ++count) {
+      slots[count] = __builtin_ctzll(here);
+      at[count] = positions[vertex(slots[count])].cast<double>();
+    }
+    // In line: twice the area under 1e-6 of the longest side squared (a
+    // height under a millionth of it), as reconstruct/hole_filling.cpp judges
+    // a flat triangle; crossings at one point count too.
+    bool found = false;
+    for (int a = 0; a < count && !found; ++a)
+      for (int b = a + 1; b < count && !found; ++b) {
+        if (!together(slots[a], slots[b])) continue;
+        for (int c = b + 1; c < count && !found; ++c) {
+          if (!together(slots[a], slots[c]) || !together(slots[b], slots[c])) continue;
+          const Eigen::Vector3d ab = at[b] - at[a], ac = at[c] - at[a], bc = at[c] - at[b];
+          const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), bc.squaredNorm()});
+          found = ab.cross(ac).squaredNorm() <= 1e-12 * longest * longest;
+        }
+      }
+    if (found) straight |= std::uint8_t(1u << f);
+  }
+  return straight;
+}
 
 void prefetch_crossings(const std::int32_t* sub_edge_vertices, const std::int32_t* edge_vertices) {
   const char* sub = reinterpret_cast<const char*>(sub_edge_vertices);

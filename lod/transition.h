@@ -56,7 +56,16 @@ struct TransitionInput {
   std::int32_t centre;                           // vertex the longest loop is fanned around
   std::uint8_t fine_faces;                       // bit axis*2+side: finer node across
   std::uint16_t split_edges;                     // bit e: finer node around edge e
+  std::uint8_t straight_faces = 0;               // bit axis*2+side: see straight_faces()
 };
+
+// Bit axis*2+side is set where three of a node's crossings (its 12 whole-edge
+// and 48 sub-edge vertices, -1 where none) on that face lie on one line: a
+// flat surface through the face, or one lying on it. A fan triangle with its
+// three corners on such a face may have no area, so the triangulation avoids
+// it (faces not marked are only avoided where another apex is free of both).
+std::uint8_t straight_faces(const std::int32_t* edge_vertices, const std::int32_t* sub_edge_vertices,
+                            const Vec3f* positions);
 
 // Appends the node's triangles (outward, counter-clockwise) to `out`.
 void triangulate_transition(const TransitionInput& in, std::vector<Triangle>* out);

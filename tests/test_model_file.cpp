@@ -244,6 +244,7 @@ TEST(ModelFile, RoundTripKeepsEveryArrayAndEveryLevelOfDetail) {
   EXPECT_EQ(a.transitions.sub_edge_vertices, b.transitions.sub_edge_vertices);
   EXPECT_EQ(a.transitions.centre_vertices, b.transitions.centre_vertices);
   EXPECT_EQ(a.transitions.neighbours, b.transitions.neighbours);
+  EXPECT_EQ(a.transitions.straight_faces, b.transitions.straight_faces);
   EXPECT_EQ(a.triangles, b.triangles);
   EXPECT_EQ(a.patches.triangles, b.patches.triangles);
   EXPECT_EQ(a.patches.group_first, b.patches.group_first);
@@ -436,6 +437,8 @@ TEST(ModelFile, CraftedContentsAreRejectedBeforeExtraction) {
       {"a pinned prefix past the LOD array", "pinned expansions", [](LodModel& l) { l.octree->lod.pinned = l.octree->lod.order.size() + 1; }},
       {"priorities not offered out of order", "('STEP')", [](LodModel& l) { std::swap(l.octree->lod.inside_steps[0], l.octree->lod.inside_steps[1]); }},
       {"a priority not offered past the array", "('STEP')", [](LodModel& l) { l.octree->lod.inside_steps.back() = std::int32_t(l.octree->lod.order.size()); }},
+      {"a straight face past the six", "straight faces", [](LodModel& l) { l.octree->tree.transitions.straight_faces[2] = 64; }},
+      {"straight faces one short", "'STRF' has", [](LodModel& l) { l.octree->tree.transitions.straight_faces.pop_back(); }},
   };
   for (const Case& c : cases) {
     LodModel crafted = m;
@@ -505,6 +508,22 @@ TEST(ModelFile, Format1FilesAreRejectedWithARebuildHintAndFormat2FilesLoad) {
       EXPECT_NE(error.find("format 1." + std::to_string(minor)), std::string::npos) << error;
       EXPECT_NE(error.find("rebuild the model"), std::string::npos) << error;
     }
+  }
+}
+
+// A 4.1 file has no straight faces (STRF): its accumulation table was
+// counted with none, and it loads with none.
+TEST(ModelFile, A41FileLoadsWithoutStraightFaces) {
+  std::vector<RawSection> sections = split(bunny64_bytes());
+  sections.erase(sections.begin() + std::ptrdiff_t(index_of(sections, tag("STRF"))));
+  const std::vector<std::uint8_t> old = join(sections, kModelFormatMajor, 1);
+  const LodModel l = decode_model(old.data(), old.size(), "old.mco");
+  const OctreeTransitions& t = l.octree->tree.transitions;
+  EXPECT_EQ(t.straight_faces.size(), t.size());
+  EXPECT_EQ(std::count(t.straight_faces.begin(), t.straight_faces.end(), 0), std::ptrdiff_t(t.size()));
+  for (double percent : {0.0, 25.0, 100.0}) {
+    const std::vector<Triangle> level = extract(*l.octree, percent);
+    EXPECT_EQ(std::int64_t(level.size()), l.octree->lod.accumulated[priority_for_percent(l.octree->lod, percent)]);
   }
 }
 

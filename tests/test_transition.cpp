@@ -1,13 +1,16 @@
 // Crack patching's transition triangulation (lod/transition.h) on hand-made
 // configurations whose answer is known.
 #include "lod/transition.h"
+#include "reconstruct/cube_table.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <map>
 #include <numeric>
 #include <set>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -104,4 +107,53 @@ TEST(Transition, ACornerBesideFinerFacesIsCutOffOnHalfEdges) {
   ASSERT_EQ(triangles.size(), 1u);
   EXPECT_EQ(std::count(triangles[0].begin(), triangles[0].end(), kCentre), 0);
   for (const std::int32_t c : triangles[0]) EXPECT_GE(c, 200) << "crossings on half-edges, not whole ones";
+}
+
+TEST(Transition, StraightFacesAreThoseWithThreeCrossingsInLine) {
+  // The node spans [0, 2]^3 in local lattice units; every crossing starts at
+  // a random point of its (sub-)edge.
+  std::vector<Vec3f> positions;
+  Vertices v;
+  std::srand(1);
+  auto point = [](int p) { return Vec3f(float(p % 3), float(p / 3 % 3), float(p / 9)); };
+  auto along = [&](int a, int b) {
+    const float t = 0.2f + 0.6f * float(std::rand()) / float(RAND_MAX);
+    positions.push_back(point(a) + t * (point(b) - point(a)));
+    return std::int32_t(positions.size() - 1);
+  };
+  const auto& sub = transition_sub_edges();
+  for (int k = 0; k < kSubEdges; ++k) v.sub_edges[std::size_t(k)] = along(sub[std::size_t(k)].a, sub[std::size_t(k)].b);
+  for (int e = 0; e < 12; ++e)
+    v.edges[std::size_t(e)] = along(lattice_of_corner(edge_corner(e, 0)), lattice_of_corner(edge_corner(e, 1)));
+  auto straight = [&] { return int(straight_faces(v.edges.data(), v.sub_edges.data(), positions.data())); };
+  EXPECT_EQ(straight(), 0) << "no three in line";
+
+  // The line z = 0.5 on face x = 2 (bit 1) meets the lower halves of the
+  // z-edges at y = 0 and y = 2 and the half-line inside the face at y = 1.
+  auto sub_edge = [&](int a, int b) -> std::int32_t& {
+    for (int k = 0; k < kSubEdges; ++k)
+      if (sub[std::size_t(k)].a == std::min(a, b) && sub[std::size_t(k)].b == std::max(a, b))
+        return v.sub_edges[std::size_t(k)];
+    throw std::logic_error("no such sub-edge");
+  };
+  auto whole_edge = [&](int a, int b) -> std::int32_t& {
+    for (int e = 0; e < 12; ++e)
+      if (std::minmax(lattice_of_corner(edge_corner(e, 0)), lattice_of_corner(edge_corner(e, 1))) == std::minmax(a, b))
+        return v.edges[std::size_t(e)];
+    throw std::logic_error("no such edge");
+  };
+  const Vec3f on_line[3] = {Vec3f(2, 0, 0.5f), Vec3f(2, 1, 0.5f), Vec3f(2, 2, 0.5f)};
+  positions[std::size_t(sub_edge(lattice(2, 0, 0), lattice(2, 0, 1)))] = on_line[0];
+  positions[std::size_t(sub_edge(lattice(2, 1, 0), lattice(2, 1, 1)))] = on_line[1];
+  positions[std::size_t(sub_edge(lattice(2, 2, 0), lattice(2, 2, 1)))] = on_line[2];
+  EXPECT_EQ(straight(), 2) << "three sub-edge crossings in line on face x = 2";
+  positions[std::size_t(sub_edge(lattice(2, 2, 0), lattice(2, 2, 1)))] = Vec3f(2, 2, 0.55f);
+  EXPECT_EQ(straight(), 0) << "a twentieth of a cell off the line";
+
+  // Whole edges' crossings on the line instead of their halves': never in
+  // one triangulation with a crossing inside the face.
+  positions[std::size_t(sub_edge(lattice(2, 0, 0), lattice(2, 0, 1)))] = Vec3f(2, 0, 0.3f);
+  positions[std::size_t(whole_edge(lattice(2, 0, 0), lattice(2, 0, 2)))] = on_line[0];
+  positions[std::size_t(whole_edge(lattice(2, 2, 0), lattice(2, 2, 2)))] = on_line[2];
+  EXPECT_EQ(straight(), 0) << "a whole edge's crossing beside one inside its face";
 }
