@@ -97,7 +97,7 @@ TEST(CliContract, AnEmptyLevelIsAnError) {
 }
 
 // --triangles T meets T within 10 %; --at-most makes it a cap. The bunny at
-// R = 64 has no octree level between 216 and 672 triangles.
+// R = 64 has no octree level between 230 and 694 triangles.
 TEST(CliContract, ATriangleBudgetIsMetWithinTenPercentOrStrictly) {
   const std::string model = testing::bunny_model().string();
   const fs::path out = scratch() / "budget.ply";
@@ -107,13 +107,13 @@ TEST(CliContract, ATriangleBudgetIsMetWithinTenPercentOrStrictly) {
     return nlohmann::json::parse(r.output).at("triangles").get<long long>();
   };
   for (const std::string structure : {"octree", "clusters"})
-    for (const long long budget : {620LL, 1000LL, 3000LL}) {
+    for (const long long budget : {650LL, 1000LL, 3000LL}) {
       const std::string ask = "--structure " + structure + " --triangles " + std::to_string(budget);
       const long long strict = triangles(ask + " --at-most"), got = triangles(ask);
       EXPECT_LE(strict, budget) << ask;
       EXPECT_TRUE(got == strict || (10 * strict < 9 * budget && got > budget && 10 * got <= 11 * budget))
           << ask << ": " << got << " (at most: " << strict << ")";
-      if (structure == "octree" && budget == 620) EXPECT_GT(got, budget) << "the level with the ears, 672";
+      if (structure == "octree" && budget == 650) EXPECT_GT(got, budget) << "the level with the ears, 694";
     }
   const CliRun r = run_cli("extract " + model + " --at-most -o " + out.string());
   EXPECT_EQ(exit_code(r), 2) << "--at-most needs --triangles: " << r.output;
