@@ -69,7 +69,7 @@ const LodModel& seed() {
     if (m.octree && (!m.clusters || m.clusters->levels() < 3)) {
       LevelExtractor full(m, LodStructure::kOctree);
       TriangleMesh mesh;
-      mesh.positions = m.vertices.positions;
+      mesh.positions.assign(m.vertices.positions.begin(), m.vertices.positions.end());
       mesh.triangles = full.extract(LevelRequest::at_percent(100)).triangles;
       ClusterOptions options;
       options.cluster_triangles = 16;
@@ -93,8 +93,10 @@ const LodModel& seed() {
   return model;
 }
 
-template <class T>
-void edit(std::vector<T>& v, std::uint32_t index, std::uint32_t value) {
+// On a std::vector or a LargeArray (core/large_array.h).
+template <class Vector>
+void edit(Vector& v, std::uint32_t index, std::uint32_t value) {
+  using T = typename Vector::value_type;
   if (v.empty()) return;
   auto* words = reinterpret_cast<std::uint8_t*>(v.data());
   const std::size_t bytes = v.size() * sizeof(T);
@@ -107,8 +109,8 @@ void edit(std::vector<T>& v, std::uint32_t index, std::uint32_t value) {
 }
 
 // Drops 1 to 4 elements from the end (all of a shorter array).
-template <class T>
-void shrink(std::vector<T>& v, std::uint32_t index) {
+template <class Vector>
+void shrink(Vector& v, std::uint32_t index) {
   v.resize(v.size() - std::min<std::size_t>(v.size(), 1 + index % 4));
 }
 
@@ -116,8 +118,8 @@ void apply(LodModel& m, const std::uint8_t* op) {
   std::uint32_t index, value;
   std::memcpy(&index, op + 1, 4);
   std::memcpy(&value, op + 5, 4);
-  const unsigned kind = op[0] % 40;
-  if (kind < 26 && !m.octree) return;
+  const unsigned kind = op[0] % 41;
+  if ((kind < 26 || kind == 40) && !m.octree) return;
   if (kind >= 30 && kind < 39 && !m.clusters) return;
   McOctree* t = m.octree ? &m.octree->tree : nullptr;
   LodArray* lod = m.octree ? &m.octree->lod : nullptr;
@@ -189,6 +191,8 @@ void apply(LodModel& m, const std::uint8_t* op) {
       if (index % 2) m.octree.reset();
       else m.clusters.reset();
       break;
+    // Added with format 4.2.
+    case 40: edit(t->transitions.straight_faces, index, value); break;
   }
 }
 
