@@ -1,6 +1,16 @@
 #include "core/types.h"
 
+#include <Eigen/Geometry>
+
+#include <algorithm>
+
 namespace scan2lod {
+
+bool in_line(const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+  const Vec3d ad = a.cast<double>(), ab = b.cast<double>() - ad, ac = c.cast<double>() - ad, bc = ac - ab;
+  const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), bc.squaredNorm()});
+  return ab.cross(ac).squaredNorm() <= 1e-12 * longest * longest;
+}
 
 Aabb bounds(ArrayView<Vec3f> points) {
   Aabb box;

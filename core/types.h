@@ -84,4 +84,10 @@ struct Aabb {
 
 Aabb bounds(ArrayView<Vec3f> points);
 
+// Whether a, b and c lie in line: the triangle's height is under a millionth
+// of its longest side (points that coincide count too). Hole filling avoids
+// such triangles, and crack patching the node faces that hold three such
+// crossings.
+bool in_line(const Vec3f& a, const Vec3f& b, const Vec3f& c);
+
 }  // namespace scan2lod

@@ -237,7 +237,6 @@ void transition_data(const LevelBegin& level_begin, const std::vector<std::uint8
 // (octree_keys.cpp).
 void find_neighbours(std::int32_t node, McOctree* tree);
 
-
 // ---- 6. jump vertices (octree_jumps.cpp) -----------------------------------
 
 // Moves each vertex of `jumps` (EdgeResolver::jumps) to within half a leaf

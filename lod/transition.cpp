@@ -3,8 +3,6 @@
 #include "core/flat_hash.h"
 #include "reconstruct/cube_table.h"
 
-#include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cstring>
 
@@ -364,25 +362,18 @@ std::uint8_t straight_faces(const std::int32_t* edge_vertices, const std::int32_
     std::uint64_t here = present & on_face[std::size_t(f)];
     if (__builtin_popcountll(here) < 3) continue;
     int slots[kCentreSlot];
-    Eigen::Vector3d at[kCentreSlot];
+    const Vec3f* at[kCentreSlot];
     int count = 0;
     for (; here; here &= here - 1, ++count) {
       slots[count] = __builtin_ctzll(here);
-      at[count] = positions[vertex(slots[count])].cast<double>();
+      at[count] = &positions[vertex(slots[count])];
     }
-    // In line: twice the area under 1e-6 of the longest side squared (a
-    // height under a millionth of it), as reconstruct/hole_filling.cpp judges
-    // a flat triangle; crossings at one point count too.
     bool found = false;
     for (int a = 0; a < count && !found; ++a)
       for (int b = a + 1; b < count && !found; ++b) {
         if (!together(slots[a], slots[b])) continue;
-        for (int c = b + 1; c < count && !found; ++c) {
-          if (!together(slots[a], slots[c]) || !together(slots[b], slots[c])) continue;
-          const Eigen::Vector3d ab = at[b] - at[a], ac = at[c] - at[a], bc = at[c] - at[b];
-          const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), bc.squaredNorm()});
-          found = ab.cross(ac).squaredNorm() <= 1e-12 * longest * longest;
-        }
+        for (int c = b + 1; c < count && !found; ++c)
+          found = together(slots[a], slots[c]) && together(slots[b], slots[c]) && in_line(*at[a], *at[b], *at[c]);
       }
     if (found) straight |= std::uint8_t(1u << f);
   }

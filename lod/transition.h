@@ -60,10 +60,11 @@ struct TransitionInput {
 };
 
 // Bit axis*2+side is set where three of a node's crossings (its 12 whole-edge
-// and 48 sub-edge vertices, -1 where none) on that face lie on one line: a
-// flat surface through the face, or one lying on it. A fan triangle with its
-// three corners on such a face may have no area, so the triangulation avoids
-// it (faces not marked are only avoided where another apex is free of both).
+// and 48 sub-edge vertices, -1 where none) on that face that one
+// triangulation can hold together lie in line (in_line, core/types.h): a flat
+// surface through the face, or one lying on it. A fan triangle with its three
+// corners on such a face may have no area; where every apex has a triangle on
+// some face, the triangulation takes one whose faces are not marked.
 std::uint8_t straight_faces(const std::int32_t* edge_vertices, const std::int32_t* sub_edge_vertices,
                             const Vec3f* positions);
 

@@ -30,9 +30,7 @@ bool triangulate(const TriangleMesh& mesh, const std::vector<std::int32_t>& loop
     const Vec3f& b = mesh.positions[loop[k]];
     const Vec3f& c = mesh.positions[loop[j]];
     const double twice_area = double((b - a).cross(c - a).norm());
-    const double longest = double(std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}));
-    // Flat: its height is under a millionth of its longest side.
-    return Cost{twice_area <= 1e-6 * longest ? 1 : 0, 0.5 * twice_area};
+    return Cost{in_line(a, b, c) ? 1 : 0, 0.5 * twice_area};
   };
   for (int i = 0; i + 1 < n; ++i) cost[at(i, i + 1)] = Cost{0, 0.0};
   for (int gap = 2; gap < n; ++gap)
