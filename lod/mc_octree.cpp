@@ -109,6 +109,7 @@ McOctree build_mc_octree(const CubeNodes& leaves, const TriangleMesh& mesh, cons
   pull_jump_vertices(edges.jumps(), field.closest, &tree);
   added_vertex_attributes(first_added, &tree);
   level_vertices(mesh, level_begin, &tree);
+  own_triangulations(field, level_begin, &tree);
   const std::vector<LeafSums> sums = leaf_sums(tree, std::size_t(level_begin[tree.depth]));
   compute_metrics(options.metric, sums, &tree);
   group_patches(leaves.patch_triangles, &tree);

@@ -180,6 +180,8 @@ const SectionSpec kSections[] = {
     {"STEP", Part::kOctree, false, [](LodModel& m, Records&) { return array(m.octree->lod.inside_steps); }},
     // 4.2, optional: older files were counted without it (all zero).
     {"STRF", Part::kOctree, false, [](LodModel& m, Records&) { return array(transitions_of(m).straight_faces); }},
+    // 4.3, optional: older readers cut the internal nodes' polygons as the case table does.
+    {"OWNC", Part::kOctree, false, [](LodModel&, Records& r) { return array(r.packed.own_cuts); }, kPacked},
     {"CINF", Part::kClusters, true, [](LodModel&, Records& r) { return record(r.cluster_info, 24); }, 3},
     {"CLUS", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->clusters); }, 3},
     {"CTRI", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->triangles); }, 3},

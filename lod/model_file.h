@@ -79,6 +79,13 @@
 // lod/transition.h; a 4.2 reader of an older file takes all zero, as that
 // file's LODA was counted):
 //   STRF u8 per internal node  OctreeTransitions::straight_faces
+// Added in 4.3, optional (a 4.2 reader skips it and cuts the internal nodes'
+// polygons along the case table's diagonals: the same outlines, so the same
+// topology, a little farther from the surface; a 4.3 reader of an older file
+// does the same):
+//   OWNC u16 per triangle of the internal nodes, laid out as their triangles
+//                              the three edges whose vertices the triangle
+//                              joins, 4 bits each (lod/model_pack.h)
 // Every section is listed once, in kSections (model_file.cpp), with the
 // formats that hold it: the writer and the reader both walk that table. A new
 // array is a new row there (and, if it must agree with others, a check in the
@@ -97,7 +104,7 @@
 namespace scan2lod {
 
 constexpr std::uint32_t kModelFormatMajor = 4;
-constexpr std::uint32_t kModelFormatMinor = 2;
+constexpr std::uint32_t kModelFormatMinor = 3;
 
 // Writes `model` to `path` (extension .mco) through a temporary file renamed
 // into place (write_atomically): a failure leaves nothing under `path`.

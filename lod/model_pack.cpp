@@ -50,6 +50,26 @@ std::uint8_t triangle_mask(const McOctree& tree, std::size_t node) {
   return mask;
 }
 
+// An internal node keeps all its case's triangles, each as the three edges
+// whose vertices it joins (PackedOctree::own_cuts).
+std::uint8_t own_cuts(const McOctree& tree, std::size_t node, std::vector<std::uint16_t>* cuts) {
+  const CubeCase& cc = cube_cases()[tree.nodes.cases[node]];
+  const auto& ev = tree.nodes.edge_vertices[node];
+  const Triangle* own = tree.triangles.data() + tree.nodes.first_triangle[node];
+  if (tree.nodes.triangle_counts[node] != cc.triangle_count)
+    throw std::logic_error("pack_octree: an internal node without all its case's triangles");
+  for (int t = 0; t < cc.triangle_count; ++t) {
+    std::uint16_t cut = 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto e = std::find(ev.begin(), ev.end(), own[t][k]);
+      if (own[t][k] < 0 || e == ev.end()) throw std::logic_error("pack_octree: a triangle off its node's edges");
+      cut |= std::uint16_t((e - ev.begin()) << (4 * k));
+    }
+    cuts->push_back(cut);
+  }
+  return std::uint8_t((1u << cc.triangle_count) - 1u);
+}
+
 // The level ranges of breadth-first nodes: level l is [begin[l], begin[l + 1]).
 std::vector<std::int32_t> level_ranges(const OctreeNodes& nodes, int depth) {
   std::vector<std::int32_t> begin(std::size_t(depth) + 2, std::int32_t(nodes.size()));
@@ -82,7 +102,8 @@ PackedOctree pack_octree(const McOctree& tree) {
   for (int level = tree.depth; level >= 0; --level)
     for (std::int32_t i = begin[level]; i < begin[level + 1]; ++i) {
       if (nodes.first_triangle[i] != expected) throw std::logic_error("pack_octree: triangles not laid out leaves first");
-      p.triangle_masks[i] = triangle_mask(tree, std::size_t(i));
+      p.triangle_masks[i] = level < tree.depth ? own_cuts(tree, std::size_t(i), &p.own_cuts)
+                                               : triangle_mask(tree, std::size_t(i));
       expected += nodes.triangle_counts[i];
     }
   if (std::size_t(expected) != tree.triangles.size()) throw std::logic_error("pack_octree: triangles no node owns");
@@ -179,6 +200,31 @@ void unpack_triangles(const std::vector<std::uint8_t>& masks, const std::string&
     }
 }
 
+// The internal nodes' triangles from their cuts, in the order pack_octree
+// wrote them (coarser levels after finer ones, as the triangles lie).
+void unpack_own_cuts(const std::vector<std::uint16_t>& cuts, const std::string& source, McOctree* tree) {
+  auto bad = [&](const std::string& what) { throw InputError(source, "inconsistent model: section 'OWNC': " + what); };
+  const OctreeNodes& nodes = tree->nodes;
+  const std::vector<std::int32_t> begin = level_ranges(nodes, tree->depth);
+  const std::size_t first = tree->depth > 0 ? std::size_t(nodes.first_triangle[std::size_t(begin[tree->depth - 1])]) : 0;
+  if (tree->depth == 0 || cuts.size() != tree->triangles.size() - first)
+    bad(std::to_string(cuts.size()) + " triangles for the internal nodes' " +
+        std::to_string(tree->triangles.size() - first));
+  for (int level = tree->depth - 1; level >= 0; --level)
+    for (std::int32_t i = begin[level]; i < begin[level + 1]; ++i) {
+      const auto& ev = nodes.edge_vertices[std::size_t(i)];
+      for (std::int32_t t = nodes.first_triangle[i], end = t + nodes.triangle_counts[i]; t < end; ++t) {
+        const std::uint16_t cut = cuts[std::size_t(t) - first];
+        const int e[3] = {cut & 15, (cut >> 4) & 15, (cut >> 8) & 15};
+        if ((cut >> 12) || e[0] >= 12 || e[1] >= 12 || e[2] >= 12 || ev[e[0]] < 0 || ev[e[1]] < 0 || ev[e[2]] < 0 ||
+            e[0] == e[1] || e[1] == e[2] || e[0] == e[2])
+          bad("triangle " + std::to_string(t) + " of node " + std::to_string(i) +
+              " names edges that are not three of the node's crossed edges");
+        tree->triangles[std::size_t(t)] = {ev[e[0]], ev[e[1]], ev[e[2]]};
+      }
+    }
+}
+
 }  // namespace
 
 void unpack_octree(const PackedOctree& packed, const std::string& source, McOctree* tree) {
@@ -204,6 +250,7 @@ void unpack_octree(const PackedOctree& packed, const std::string& source, McOctr
   // afterwards, and libgomp's pool does not survive a fork.
   unpack_masked<12>(packed.edge_masks, packed.edge_vertices, "EDGM", "EDGP", source, &tree->nodes.edge_vertices);
   unpack_triangles(packed.triangle_masks, source, tree);
+  if (!packed.own_cuts.empty()) unpack_own_cuts(packed.own_cuts, source, tree);
   unpack_masked<kSubEdges>(packed.sub_edge_masks, packed.sub_edge_vertices, "SUBM", "SUBP", source,
                            &tree->transitions.sub_edge_vertices);
   resize_for_load(&tree->transitions.neighbours, internal);

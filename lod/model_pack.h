@@ -31,6 +31,9 @@ struct PackedOctree {
   std::vector<std::uint8_t> triangle_masks;   // per node, over its case's triangles
   std::vector<std::uint64_t> sub_edge_masks;  // per internal node
   std::vector<std::int32_t> sub_edge_vertices;
+  // Per triangle of the internal nodes, node by node: edges e0 | e1 << 4 | e2 << 8.
+  // Empty in older files: their triangles are the case table's.
+  std::vector<std::uint16_t> own_cuts;
 };
 
 // Resizes a vector the decoder is about to fill to `count` elements, without
@@ -44,13 +47,15 @@ void resize_for_load(Vector* v, std::size_t count) {
 
 // Packs tree's nodes, edge vertices, triangles and sub-edge vertices. Throws
 // std::logic_error when the tree is not laid out as build_mc_octree lays it
-// (breadth-first, children by octant, triangles from the cases), which every
-// built or loaded tree is.
+// (breadth-first, children by octant, a leaf's triangles from its case, an
+// internal node's as many as its case has, between its edge vertices), which
+// every built or loaded tree is.
 PackedOctree pack_octree(const McOctree& tree);
 
 // Rebuilds tree->nodes (all but cases and metrics, which must be set),
 // tree->triangles, and tree->transitions' sub-edge vertices and neighbours,
-// from `packed`. Throws InputError naming `source` when the packed arrays do
+// from `packed` (the internal nodes' triangles from `own_cuts` where it is not
+// empty, else from their cases). Throws InputError naming `source` when the packed arrays do
 // not agree with each other (counts, masks past their case or past the
 // depth); what they name is checked afterwards by the decoder as in format 3.
 void unpack_octree(const PackedOctree& packed, const std::string& source, McOctree* tree);

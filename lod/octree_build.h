@@ -14,6 +14,8 @@
 //                        (octree_centres.cpp)
 //   8. level vertices    each level's own copies of its crossings, placed by
 //                        the mesh's tangent planes (octree_level_vertices.cpp)
+//  8b. own triangulations  each coarse polygon cut along the diagonals whose
+//                        triangles lie nearest the mesh (octree_triangulations.cpp)
 //   9. metric            the LOD metric from sums over the leaf triangles
 //                        (octree_metric.cpp)
 //  10. patch groups      the leaves' hole patches grouped by hole (octree_patches.cpp)
@@ -256,6 +258,12 @@ void added_vertex_attributes(std::size_t first_added, McOctree* tree);
 // the level's edges, sub-edges (of the level above) and own triangles at the
 // copies. Their normals and colours are the copied vertex's.
 void level_vertices(const TriangleMesh& mesh, const LevelBegin& level_begin, McOctree* tree);
+
+// ---- 8b. own triangulations (octree_triangulations.cpp) --------------------
+
+// Cuts each coarse node's polygons where its triangles lie nearest the mesh
+// (`field`'s distance), in place: the same count of triangles per node.
+void own_triangulations(const MeshField& field, const LevelBegin& level_begin, McOctree* tree);
 
 // ---- 9. metric (octree_metric.cpp) -----------------------------------------
 
