@@ -147,6 +147,26 @@ TEST(ClusterHierarchy, ViewCutsAreWatertightFromAnyCamera) {
 
 // A sphere of radius 1 with three colour bands, scanned, reconstructed and
 // simplified with and without colours in the quadrics.
+// A box's faces are flat: a collapse along one of its edges can leave three
+// vertices in line in one triangle, no area in float (box R = 128 had one,
+// R = 256 four). No stored triangle of any level may be such a sliver.
+TEST(ClusterHierarchy, FlatFacesGiveNoTriangleWithoutArea) {
+  ReconstructOptions options;
+  options.resolution = 128;
+  const TriangleMesh box =
+      reconstruct(testing::scan_shape(testing::from_open3d(*open3d::geometry::TriangleMesh::CreateBox(1, 1, 1))),
+                  options)
+          .mesh;
+  LodModel model;
+  add_cluster_hierarchy(&model, box, false);
+  const TriangleMesh stored = level_mesh(model, model.clusters->triangles);
+  std::size_t flat = 0;
+  for (std::size_t t = 0; t < stored.triangles.size(); ++t) flat += triangle_is_degenerate(stored, t);
+  EXPECT_EQ(flat, 0u) << "of " << stored.triangles.size() << " stored triangles";
+  EXPECT_EQ(mesh_topology(box).degenerate_triangles, 0u) << "the full mesh has none to begin with";
+  EXPECT_GT(stored.triangles.size(), box.triangles.size());
+}
+
 Rgb band_colour(const Vec3f& p) {
   if (p.z() > 0.35f) return {230, 40, 40};
   if (p.z() < -0.35f) return {40, 40, 230};
