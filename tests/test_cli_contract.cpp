@@ -61,7 +61,7 @@ TEST(CliContract, QuietIsSilentAndJsonStillAnswers) {
     EXPECT_EQ(r.output, "") << cmd;
     r = run_cli(cmd + " -q --json", /*merge_stderr=*/false);
     EXPECT_EQ(exit_code(r), 0) << cmd;
-    EXPECT_NO_THROW((void)nlohmann::json::parse(r.output)) << cmd << ": " << r.output;
+    EXPECT_TRUE(nlohmann::json::accept(r.output)) << cmd << ": " << r.output;
   }
   // Every command that produces something answers --json.
   const fs::path scans = scratch() / "scans";
@@ -71,7 +71,7 @@ TEST(CliContract, QuietIsSilentAndJsonStillAnswers) {
         "compare " + out.string() + " " + out.string()}) {
     const CliRun r = run_cli(cmd + " --json", false);
     EXPECT_EQ(exit_code(r), 0) << cmd << ": " << r.output;
-    EXPECT_NO_THROW((void)nlohmann::json::parse(r.output)) << cmd << ": " << r.output;
+    EXPECT_TRUE(nlohmann::json::accept(r.output)) << cmd << ": " << r.output;
   }
 }
 
