@@ -1,6 +1,7 @@
 #include "acquisition/lattice_normals.h"
 
 #include <cmath>
+#include <limits>
 
 namespace scan2lod {
 
@@ -20,7 +21,8 @@ OrientedPoints range_image_to_points(const RangeImage& image, const ScanPose& po
     for (int c = 0; c < W; ++c) {
       if (!valid(r, c)) continue;
       const Vec3f& p = image.points[std::size_t(r) * W + c];
-      Vec3f d[4];
+      // Zeroed: GCC cannot see that only the ok[] ones are read.
+      Vec3f d[4] = {Vec3f::Zero(), Vec3f::Zero(), Vec3f::Zero(), Vec3f::Zero()};
       float len[4] = {0, 0, 0, 0};
       bool ok[4];
       float shortest = std::numeric_limits<float>::max();
