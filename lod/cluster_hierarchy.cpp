@@ -75,6 +75,18 @@ Sphere enclosing_sphere(const std::vector<Sphere>& spheres) {
   return out;
 }
 
+// Buffers of the meshlet builder, kept per thread across groups: fresh ones
+// for every group were page faults on every call.
+struct MeshletScratch {
+  std::vector<std::int32_t> used;   // the group's vertices, ascending
+  std::vector<std::int32_t> local;  // global vertex -> index in used; -1 between groups
+  std::vector<Vec3f> local_positions;
+  std::vector<unsigned> indices;
+  std::vector<meshopt_Meshlet> meshlets;
+  std::vector<unsigned> meshlet_vertices;
+  std::vector<unsigned char> meshlet_triangles;
+};
+
 // Simplified triangles cut into clusters.
 struct SplitGroup {
   SimplifiedGroup simplified;
@@ -87,32 +99,57 @@ struct SplitGroup {
 // keeps meshlets compact), reordered cluster by cluster: part[t] is t's
 // cluster. Each triangle keeps its corners and their order, so the full
 // mesh's clusters are the input mesh.
+//
+// The builder sizes and clears its per-vertex tables by the vertex count it is
+// given, so a group is first renumbered onto its own vertices, in their global
+// order (the same walk, so the same clusters): passing the whole mesh's count
+// made every small group pay for every vertex, and the build grew with the
+// square of the mesh.
 std::vector<std::int32_t> meshlet_parts(ArrayView<Vec3f> positions, std::vector<Triangle>* triangles,
                                         int cluster_triangles, int* parts) {
+  thread_local MeshletScratch s;
+  if (s.local.size() < positions.size()) s.local.assign(positions.size(), -1);
+  s.used.clear();
+  if (3 * triangles->size() > positions.size() / 4) {
+    // A large share of the mesh (the full mesh): one scan of marks beats a sort.
+    for (const Triangle& t : *triangles)
+      for (std::int32_t v : t) s.local[std::size_t(v)] = 0;
+    for (std::size_t v = 0; v < positions.size(); ++v)
+      if (s.local[v] == 0) s.used.push_back(std::int32_t(v));
+  } else {
+    for (const Triangle& t : *triangles) s.used.insert(s.used.end(), t.begin(), t.end());
+    std::sort(s.used.begin(), s.used.end());
+    s.used.erase(std::unique(s.used.begin(), s.used.end()), s.used.end());
+  }
+  s.local_positions.resize(s.used.size());
+  for (std::size_t i = 0; i < s.used.size(); ++i) s.local_positions[i] = positions[std::size_t(s.used[i])];
+  for (std::size_t i = 0; i < s.used.size(); ++i) s.local[std::size_t(s.used[i])] = std::int32_t(i);
+  s.indices.resize(3 * triangles->size());
+  for (std::size_t t = 0; t < triangles->size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      s.indices[3 * t + std::size_t(k)] = unsigned(s.local[std::size_t((*triangles)[t][std::size_t(k)])]);
+  for (std::int32_t v : s.used) s.local[std::size_t(v)] = -1;
   const std::size_t max_triangles = std::size_t(std::clamp(cluster_triangles / 4 * 4, 4, 512));
   const std::size_t max_vertices = 255;
-  const std::size_t bound = meshopt_buildMeshletsBound(3 * triangles->size(), max_vertices, max_triangles);
-  std::vector<meshopt_Meshlet> meshlets(bound);
-  std::vector<unsigned> meshlet_vertices(bound * max_vertices);
-  std::vector<unsigned char> meshlet_triangles(bound * max_triangles * 3);
+  const std::size_t bound = meshopt_buildMeshletsBound(s.indices.size(), max_vertices, max_triangles);
+  s.meshlets.resize(bound);
+  s.meshlet_vertices.resize(bound * max_vertices);
+  s.meshlet_triangles.resize(bound * max_triangles * 3);
   const std::size_t count = meshopt_buildMeshlets(
-      meshlets.data(), meshlet_vertices.data(), meshlet_triangles.data(),
-      reinterpret_cast<const unsigned*>(triangles->data()), 3 * triangles->size(), &positions[0].x(), positions.size(),
-      sizeof(Vec3f), max_vertices, max_triangles, 0.f);
-  std::vector<Triangle> out;
+      s.meshlets.data(), s.meshlet_vertices.data(), s.meshlet_triangles.data(), s.indices.data(), s.indices.size(),
+      &s.local_positions[0].x(), s.local_positions.size(), sizeof(Vec3f), max_vertices, max_triangles, 0.f);
   std::vector<std::int32_t> part;
-  out.reserve(triangles->size());
+  part.reserve(triangles->size());
+  std::size_t at = 0;
   for (std::size_t m = 0; m < count; ++m) {
-    const meshopt_Meshlet& ml = meshlets[m];
+    const meshopt_Meshlet& ml = s.meshlets[m];
     for (unsigned t = 0; t < ml.triangle_count; ++t) {
-      const unsigned char* corner = &meshlet_triangles[ml.triangle_offset + 3 * t];
-      out.push_back({std::int32_t(meshlet_vertices[ml.vertex_offset + corner[0]]),
-                     std::int32_t(meshlet_vertices[ml.vertex_offset + corner[1]]),
-                     std::int32_t(meshlet_vertices[ml.vertex_offset + corner[2]])});
+      const unsigned char* corner = &s.meshlet_triangles[ml.triangle_offset + 3 * t];
+      Triangle& out = (*triangles)[at++];
+      for (int k = 0; k < 3; ++k) out[std::size_t(k)] = s.used[s.meshlet_vertices[ml.vertex_offset + corner[k]]];
       part.push_back(std::int32_t(m));
     }
   }
-  *triangles = std::move(out);
   *parts = int(count);
   return part;
 }
