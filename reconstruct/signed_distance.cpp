@@ -47,24 +47,76 @@ PointIndex::PointIndex(const OrientedPoints& points) {
 
 PointIndex::~PointIndex() = default;
 
+namespace {
+
+// Orders each row's neighbours by (squared distance, index): FLANN returns
+// equal distances in the order its tree met them, which differs between a
+// point set and a subset of it (a brick), and so would a value that sums them.
+void order_ties(std::int32_t* idx, float* d2, int k) {
+  for (int i = 1; i < k; ++i)
+    for (int j = i; j > 0 && d2[j] == d2[j - 1] && idx[j] >= 0 && (idx[j - 1] < 0 || idx[j] < idx[j - 1]); --j)
+      std::swap(idx[j], idx[j - 1]);
+}
+
+}  // namespace
+
 void PointIndex::knn(const Vec3f* queries, std::size_t count, int k, std::int32_t* indices,
                      float* squared_distances, int threads) const {
   if (count == 0) return;
-  flann::Matrix<float> q(const_cast<float*>(queries->data()), count, 3);
-  flann::Matrix<int> idx(indices, count, std::size_t(k));
-  flann::Matrix<float> dist(squared_distances, count, std::size_t(k));
   flann::SearchParams params;
   // Small batches (late surface-following rounds) are not worth waking threads.
   params.cores = count < kParallelMinimum ? 1 : threads > 0 ? threads : omp_get_max_threads();
   params.sorted = true;
-  impl_->index.knnSearch(q, idx, dist, std::size_t(k), params);
+  const int points = int(impl_->data.rows);
+  auto search = [&](const Vec3f* q, std::size_t n, int kk, std::int32_t* idx, float* d2) {
+    flann::Matrix<float> qm(const_cast<float*>(q->data()), n, 3);
+    flann::Matrix<int> im(idx, n, std::size_t(kk));
+    flann::Matrix<float> dm(d2, n, std::size_t(kk));
+    impl_->index.knnSearch(qm, im, dm, std::size_t(kk), params);
+  };
+  if (k >= points) {
+    search(queries, count, k, indices, squared_distances);
+    for (std::size_t i = 0; i < count; ++i) order_ties(indices + i * k, squared_distances + i * k, k);
+    return;
+  }
+  // One neighbour more tells whether the k-th is tied with points left out:
+  // then the tied ones are fetched and the lowest indices kept, so that the
+  // k nearest are one set whatever tree found them.
+  const int wide = k + 1;
+  thread_local std::vector<std::int32_t> idx;
+  thread_local std::vector<float> d2;
+  idx.resize(count * std::size_t(wide));
+  d2.resize(count * std::size_t(wide));
+  search(queries, count, wide, idx.data(), d2.data());
+  std::vector<std::size_t> tied;
+  for (std::size_t i = 0; i < count; ++i) {
+    std::int32_t* row = &idx[i * wide];
+    float* dist = &d2[i * wide];
+    if (row[k] >= 0 && dist[k] == dist[k - 1]) tied.push_back(i);
+    order_ties(row, dist, k);
+    std::copy(row, row + k, indices + i * k);
+    std::copy(dist, dist + k, squared_distances + i * k);
+  }
+  for (std::size_t i : tied) {
+    std::vector<std::int32_t> more;
+    std::vector<float> dist;
+    for (int m = 2 * wide;; m = std::min(points, 2 * m)) {
+      more.assign(std::size_t(m), -1);
+      dist.assign(std::size_t(m), 0.f);
+      search(queries + i, 1, m, more.data(), dist.data());
+      if (m == points || dist[std::size_t(m - 1)] > squared_distances[i * k + k - 1]) break;
+    }
+    order_ties(more.data(), dist.data(), int(more.size()));
+    std::copy(more.begin(), more.begin() + k, indices + i * k);
+    std::copy(dist.begin(), dist.begin() + k, squared_distances + i * k);
+  }
 }
 
 void signed_distances(const OrientedPoints& points, const PointIndex& index,
                       const std::vector<Vec3f>& queries, float cube_size,
                       const SignedDistanceOptions& options, int threads,
                       std::vector<float>* distance, std::vector<std::int32_t>* nearest,
-                      DistanceScratch* scratch) {
+                      DistanceScratch* scratch, std::vector<float>* needed) {
   const std::size_t n = queries.size();
   const int k = options.method == DistanceMethod::planes
                     ? std::max(1, std::min<int>(options.neighbours, int(points.size())))
@@ -79,6 +131,7 @@ void signed_distances(const OrientedPoints& points, const PointIndex& index,
   index.knn(queries.data(), n, k, idx.data(), d2.data(), threads);
   distance->assign(n, std::numeric_limits<float>::quiet_NaN());
   nearest->assign(n, -1);
+  if (needed) needed->assign(n, std::numeric_limits<float>::infinity());
   const bool have_spacing = points.spacing.size() == points.size();
   const bool have_confidence = points.confidence.size() == points.size();
   const int nthreads = n < kParallelMinimum ? 1 : threads > 0 ? threads : omp_get_max_threads();
@@ -90,6 +143,7 @@ void signed_distances(const OrientedPoints& points, const PointIndex& index,
     if (p0 < 0) continue;
     const float scale = std::max(cube_size, have_spacing ? points.spacing[p0] : 0.f);
     const float limit = options.max_distance * scale;
+    if (needed) (*needed)[i] = std::sqrt(dd[0]);
     if (dd[0] > limit * limit) continue;
     (*nearest)[i] = p0;
     const Vec3f& v = queries[i];
@@ -113,6 +167,12 @@ void signed_distances(const OrientedPoints& points, const PointIndex& index,
           weight += w;
         }
         (*distance)[i] = weight > 0.0 ? float(sum / weight) : plane;
+        if (needed) {
+          // With fewer points than neighbours asked for, the whole set may hold more.
+          const float kth = id[k - 1] >= 0 && k == options.neighbours ? dd[k - 1]
+                                                                      : std::numeric_limits<float>::infinity();
+          (*needed)[i] = std::sqrt(std::min(kth, zero_weight_squared(dd[0], sigma)));
+        }
         break;
       }
     }

@@ -40,7 +40,9 @@ class PointIndex {
   PointIndex& operator=(const PointIndex&) = delete;
 
   // For each query, the k nearest points (indices, squared distances), row-major
-  // count x k. Runs on `threads` threads (0: all).
+  // count x k; equal distances in index order, and a tie at the k-th broken by
+  // index, so that any subset that holds them (a brick) gives the same
+  // neighbours in the same order. Runs on `threads` threads (0: all).
   void knn(const Vec3f* queries, std::size_t count, int k, std::int32_t* indices,
            float* squared_distances, int threads) const;
 
@@ -62,11 +64,21 @@ struct DistanceScratch {
   std::vector<std::int32_t> indices;
   std::vector<float> squared_distances;
 };
+// @param[out] needed     optional: #Q radii within which every point that
+//                        decides the query's value lies (its closest point when
+//                        undefined; else the k-th closest, or where the kernel's
+//                        weight is exactly 0 in float if nearer). A caller that
+//                        holds every point within that radius of the query has
+//                        the value the whole point set gives (brick builds).
 void signed_distances(const OrientedPoints& points, const PointIndex& index,
                       const std::vector<Vec3f>& queries, float cube_size,
                       const SignedDistanceOptions& options, int threads,
                       std::vector<float>* distance, std::vector<std::int32_t>* nearest,
-                      DistanceScratch* scratch = nullptr);
+                      DistanceScratch* scratch = nullptr, std::vector<float>* needed = nullptr);
+
+// Squared distance past which a Gaussian weight exp(-(d² - d0²) / σ²) of
+// float is exactly 0: 105 σ² beyond d0² (exp(-x) underflows past x ≈ 103.97).
+inline float zero_weight_squared(float d0_squared, float sigma) { return d0_squared + 105.f * sigma * sigma; }
 
 }  // namespace scan2lod
 
