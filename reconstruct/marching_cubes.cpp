@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/flat_hash.h"
 #include "core/progress.h"
+#include "reconstruct/brick_surface.h"
 #include "reconstruct/cube_table.h"
 #include "reconstruct/hole_filling.h"
 #include "reconstruct/resolution_guard.h"
@@ -67,32 +68,45 @@ class SurfaceBuilder {
  public:
   // expected_cubes: the guard's estimate of the cubes the surface touches, to
   // size the grid's arrays once rather than grow (and page-fault) them again.
-  SurfaceBuilder(const OrientedPoints& points, const ReconstructOptions& options, double expected_cubes)
+  // region: the cubes this builder may add (a brick's own), or null for the
+  // whole grid. Cubes outside it that the surface leads into are kept as
+  // requests (requests()) for the builder that owns them.
+  SurfaceBuilder(const OrientedPoints& points, const ReconstructOptions& options, double expected_cubes,
+                 const CubeGrid& grid, const CubeRegion* region = nullptr, float far_bound = 0)
       : expected_cubes_(std::size_t(std::min(expected_cubes, 1e9))),
         points_(points),
         options_(options),
         threads_(options.threads > 0 ? options.threads : omp_get_max_threads()),
-        grid_(make_cube_grid(bounds(points.positions), options.resolution)),
+        grid_(grid),
+        region_(region ? std::optional<CubeRegion>(*region) : std::nullopt),
         h_(float(grid_.cube_size)),
         index_(points),
-        have_spacing_(points.spacing.size() == points.size()) {}
+        have_spacing_(points.spacing.size() == points.size()) {
+    if (region) far_bound_ = far_bound;
+  }
 
   const CubeGrid& grid() const { return grid_; }
   const PointIndex& index() const { return index_; }
   std::size_t cube_count() const { return cube_keys_.size(); }
   std::size_t corner_count() const { return corner_keys_.size(); }
+  float needed_radius() const { return needed_radius_; }
   std::size_t grown_cubes() const { return std::size_t(std::count(grown_.begin(), grown_.end(), 1)); }
   std::size_t usable_cubes() const { return std::size_t(std::count(usable_.begin(), usable_.end(), 1)); }
 
   // Cubes that hold points, grown by `margin`, then every cube the surface
   // leads into across a face, while its centre stays within reach of the data.
-  std::size_t follow_surface(Progress& progress) {
+  // `followed`: cubes another brick's surface leads into; they join as if
+  // reached by following (judged by reach, unlike seeds).
+  std::size_t follow_surface(Progress* progress, const std::vector<std::uint64_t>& followed = {}) {
     add_seed_cubes();
+    const std::size_t seeds = cube_keys_.size();
+    for (std::uint64_t key : followed)
+      if (in_region(key)) add_cube(key);
     std::size_t rounds = 0;
     for (std::size_t begin = 0; begin < cube_keys_.size(); ++rounds) {
       const std::size_t end = cube_keys_.size();
-      if (begin > 0) judge_reach(begin, end);
-      evaluate_corners(begin, end, options_.distance, &progress);
+      judge_reach(std::max(begin, seeds), end);
+      evaluate_corners(begin, end, options_.distance, progress);
       for (std::size_t c = begin; c < end; ++c)
         if (usable_[c]) add_crossed_neighbours(c);
       begin = end;
@@ -286,6 +300,39 @@ class SurfaceBuilder {
     mesh->triangles = std::move(triangles_);
     boundary->clear();
     for (const OpenEdge& e : open_) boundary->push_back({vertex_remap[e.a], vertex_remap[e.b]});
+  }
+
+  // The emitted surface as a brick's share of the whole: vertices keyed by
+  // their lattice edge and leaves by their cube, so that bricks weld and
+  // order the same whatever their size; the cubes the surface leads into
+  // outside the region; and the region's touched border cubes.
+  void take_brick_surface(BrickSurface* out) {
+    *out = BrickSurface{};
+    out->vertex_edges.assign(positions_.size(), 0);
+    for (std::size_t l = 0; l < leaf_count(); ++l) {
+      const std::uint64_t cube_key = cube_keys_[leaf_cube_[l]];
+      for (int e = 0; e < 12; ++e) {
+        const std::int32_t v = leaf_edge_vertices_[l][e];
+        if (v >= 0) out->vertex_edges[v] = (corner_key_of(cube_key, edge_corner(e, 0)) << 2) | std::uint64_t(e / 4);
+      }
+    }
+    out->positions = std::move(positions_);
+    for (std::size_t l = 0; l < leaf_count(); ++l) {
+      if (!leaf_alive_[l]) continue;
+      out->leaf_cubes.push_back(cube_keys_[leaf_cube_[l]]);
+      out->leaf_cases.push_back(leaf_case_[l]);
+    }
+    std::sort(requests_.begin(), requests_.end());
+    requests_.erase(std::unique(requests_.begin(), requests_.end()), requests_.end());
+    out->requests = std::move(requests_);
+    for (std::uint64_t key : cube_keys_) {
+      int xyz[3];
+      unpack_key(key, &xyz[0], &xyz[1], &xyz[2]);
+      bool border = false;
+      for (int a = 0; a < 3; ++a) border |= xyz[a] == region_->lo[a] || xyz[a] + 1 == region_->hi[a];
+      if (border) out->border_cubes.push_back(key);
+    }
+    std::sort(out->border_cubes.begin(), out->border_cubes.end());
   }
 
   // Open edges of every leaf, found once after the first emission; later
@@ -581,7 +628,7 @@ class SurfaceBuilder {
           for (int dx = -m; dx <= m; ++dx) {
             const int nx = x + dx, ny = y + dy, nz = z + dz;
             if (nx < 0 || ny < 0 || nz < 0 || nx >= R || ny >= R || nz >= R) continue;
-            add_cube(pack_key(nx, ny, nz));
+            if (in_region(pack_key(nx, ny, nz))) add_cube(pack_key(nx, ny, nz));
           }
     }
   }
@@ -600,6 +647,7 @@ class SurfaceBuilder {
 
   // Cubes reached by following are usable while their centre is near a point.
   void judge_reach(std::size_t begin, std::size_t end) {
+    if (begin >= end) return;
     std::vector<Vec3f> centres(end - begin);
     for (std::size_t c = begin; c < end; ++c) {
       int x, y, z;
@@ -612,6 +660,7 @@ class SurfaceBuilder {
     for (std::size_t i = 0; i < centres.size(); ++i) {
       const float limit = options_.reach * scale(nn[i]);
       usable_[begin + i] = d2[i] <= limit * limit;
+      if (region_) need(std::min(std::sqrt(d2[i]), far_bound_));
     }
   }
 
@@ -664,7 +713,11 @@ class SurfaceBuilder {
         unpack_key(corner_keys_[todo[i]], &x, &y, &z);
         queries[i - b] = grid_.corner_position(x, y, z);
       }
-      signed_distances(points_, index_, queries, h_, distance, threads_, &d, &nearest, &distance_scratch_);
+      signed_distances(points_, index_, queries, h_, distance, threads_, &d, &nearest, &distance_scratch_,
+                       region_ ? &scratch_needed_ : nullptr);
+      if (region_)
+        for (std::size_t i = 0; i < e - b; ++i)
+          need(std::isnan(d[i]) ? std::min(scratch_needed_[i], far_bound_) : scratch_needed_[i]);
       for (std::size_t i = b; i < e; ++i) {
         corner_distances_[todo[i]] = d[i - b];
         corner_relaxed_[todo[i]] = relaxed;
@@ -692,7 +745,9 @@ class SurfaceBuilder {
         if (defined != 4 || inside == 0 || inside == 4) continue;
         const int n = xyz[axis] + (side ? 1 : -1);
         if (n < 0 || n >= grid_.resolution) continue;
-        add_cube(side ? cube_keys_[c] + kAxisStep[axis] : cube_keys_[c] - kAxisStep[axis]);
+        const std::uint64_t key = side ? cube_keys_[c] + kAxisStep[axis] : cube_keys_[c] - kAxisStep[axis];
+        if (in_region(key)) add_cube(key);
+        else requests_.push_back(key);
       }
     }
   }
@@ -710,11 +765,31 @@ class SurfaceBuilder {
     return true;
   }
 
+  // A brick's values are the whole point set's where its halo holds every
+  // point within this radius of every query it made.
+  void need(float radius) { needed_radius_ = std::max(needed_radius_, radius); }
+
+  bool in_region(std::uint64_t key) const {
+    if (!region_) return true;
+    int xyz[3];
+    unpack_key(key, &xyz[0], &xyz[1], &xyz[2]);
+    for (int a = 0; a < 3; ++a)
+      if (xyz[a] < region_->lo[a] || xyz[a] >= region_->hi[a]) return false;
+    return true;
+  }
+
   const std::size_t expected_cubes_;
   const OrientedPoints& points_;
   const ReconstructOptions& options_;
   const int threads_;
   const CubeGrid grid_;
+  const std::optional<CubeRegion> region_;
+  std::vector<std::uint64_t> requests_;  // cubes outside the region the surface leads into
+  // No point outside a brick's halo reaches farther into it than this: a query
+  // whose closest point lies farther may take it as undefined.
+  float far_bound_ = std::numeric_limits<float>::infinity();
+  float needed_radius_ = 0;
+  std::vector<float> scratch_needed_;
   const float h_;
   PointIndex index_;
   const bool have_spacing_;
@@ -832,13 +907,13 @@ Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOption
       check_resolution_fits(points, options.resolution, options.threads, options.memory_limit);
   const std::string advice = coarse_input_advice(points, options.resolution);
   if (!advice.empty()) result.warnings.push_back(advice);
-  SurfaceBuilder builder(points, options, estimate.cubes);
+  SurfaceBuilder builder(points, options, estimate.cubes, make_cube_grid(bounds(points.positions), options.resolution));
   stats.seconds_index = lap();
   const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
   {
     // About two corners per cube touched.
     Progress progress("signed distances", std::size_t(2.0 * estimate.cubes) + 1);
-    stats.following_rounds = builder.follow_surface(progress);
+    stats.following_rounds = builder.follow_surface(&progress);
   }
   stats.seconds_distances = lap();
   TriangleMesh& mesh = result.mesh;
@@ -853,31 +928,63 @@ Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOption
   stats.cubes_emitting = result.leaves.size();
 
   mesh.normals = vertex_normals(mesh);
-  if (points.has_colors()) {
-    // Vertex colour: Gaussian-weighted mean of the nearest points' colours.
-    const int k = std::min<int>(8, int(points.size()));
-    std::vector<std::int32_t> idx(mesh.positions.size() * k);
-    std::vector<float> d2(mesh.positions.size() * k);
-    builder.index().knn(mesh.positions.data(), mesh.positions.size(), k, idx.data(), d2.data(), threads);
-    mesh.colors.resize(mesh.positions.size());
-    const float h = float(builder.grid().cube_size);
-    const float inv = 1.f / (h * h);
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-      float sum[3] = {0, 0, 0}, wsum = 0;
-      for (int j = 0; j < k; ++j) {
-        const std::int32_t p = idx[v * k + j];
-        if (p < 0) break;
-        const float w = std::exp(-(d2[v * k + j] - d2[v * k]) * inv);
-        for (int ch = 0; ch < 3; ++ch) sum[ch] += w * points.colors[p][ch];
-        wsum += w;
-      }
-      for (int ch = 0; ch < 3; ++ch)
-        mesh.colors[v][ch] = std::uint8_t(std::clamp(sum[ch] / wsum + 0.5f, 0.f, 255.f));
-    }
-  }
+  mesh.colors = vertex_colors(points, builder.index(), mesh.positions, float(builder.grid().cube_size), threads);
   stats.seconds_attributes = lap();
   return result;
+}
+
+std::vector<Rgb> vertex_colors(const OrientedPoints& points, const PointIndex& index,
+                               const std::vector<Vec3f>& positions, float cube_size, int threads,
+                               std::vector<float>* needed) {
+  std::vector<Rgb> colors;
+  if (!points.has_colors() || positions.empty()) return colors;
+  const int k = std::min<int>(8, int(points.size()));
+  std::vector<std::int32_t> idx(positions.size() * k);
+  std::vector<float> d2(positions.size() * k);
+  index.knn(positions.data(), positions.size(), k, idx.data(), d2.data(), threads);
+  colors.resize(positions.size());
+  const float inv = 1.f / (cube_size * cube_size);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    float sum[3] = {0, 0, 0}, wsum = 0;
+    for (int j = 0; j < k; ++j) {
+      const std::int32_t p = idx[v * k + j];
+      if (p < 0) break;
+      const float w = std::exp(-(d2[v * k + j] - d2[v * k]) * inv);
+      for (int ch = 0; ch < 3; ++ch) sum[ch] += w * points.colors[p][ch];
+      wsum += w;
+    }
+    for (int ch = 0; ch < 3; ++ch) colors[v][ch] = std::uint8_t(std::clamp(sum[ch] / wsum + 0.5f, 0.f, 255.f));
+  }
+  if (needed) {
+    needed->resize(positions.size());
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+      const float kth = k == 8 ? d2[v * k + k - 1] : std::numeric_limits<float>::infinity();
+      (*needed)[v] = std::sqrt(std::min(kth, zero_weight_squared(d2[v * k], cube_size)));
+    }
+  }
+  return colors;
+}
+
+BrickSurface reconstruct_brick(const OrientedPoints& points, const CubeGrid& grid, const CubeRegion& region,
+                               const std::vector<std::uint64_t>& followed, double expected_cubes, float far_bound,
+                               const ReconstructOptions& options) {
+  BrickSurface out;
+  if (points.size() == 0) return out;  // no point: no corner is defined
+  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  SurfaceBuilder builder(points, options, expected_cubes, grid, &region, far_bound);
+  out.following_rounds = builder.follow_surface(nullptr, followed);
+  std::vector<std::int32_t> all(builder.cube_count());
+  std::iota(all.begin(), all.end(), 0);
+  builder.emit(all);
+  out.cubes_touched = builder.usable_cubes();
+  out.corners_evaluated = builder.corner_count();
+  out.needed_halo = builder.needed_radius();
+  builder.take_brick_surface(&out);
+  std::vector<float> needed;
+  out.colors = vertex_colors(points, builder.index(), out.positions, float(grid.cube_size), threads, &needed);
+  for (float r : needed) out.needed_halo = std::max(out.needed_halo, r);
+  return out;
 }
 
 }  // namespace scan2lod

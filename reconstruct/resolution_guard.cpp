@@ -63,6 +63,10 @@ double cgroup_limit() {
 
 }  // namespace
 
+double reconstruction_bytes(double points, double cubes) {
+  return kFixedBytes + kBytesPerPoint * points + kBytesPerCube * cubes;
+}
+
 ReconstructionEstimate estimate_reconstruction(const OrientedPoints& points, int resolution, int threads) {
   ReconstructionEstimate e;
   e.resolution = resolution;
@@ -79,7 +83,7 @@ ReconstructionEstimate estimate_reconstruction(const OrientedPoints& points, int
   const double scale = double(resolution - 8) / double(coarse - 8);
   e.cubes = kCubesPerCoarseCell * double(cells) * scale * scale;
   const double n = double(points.size());
-  e.bytes = kFixedBytes + kBytesPerPoint * n + kBytesPerCube * e.cubes;
+  e.bytes = reconstruction_bytes(n, e.cubes);
   const int cores = threads > 0 ? threads : omp_get_max_threads();
   e.seconds = (kCoreSecondsPerCube * e.cubes + kCoreSecondsPerPoint * n) / std::max(1, cores);
   return e;
@@ -89,6 +93,22 @@ double machine_memory_bytes() {
   const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
   const double limit = cgroup_limit();
   return limit > 0 && limit < physical ? limit : physical;
+}
+
+double available_memory_bytes() {
+  double available = machine_memory_bytes();
+  std::ifstream meminfo("/proc/meminfo");
+  std::string name;
+  double kib;
+  while (meminfo >> name >> kib) {
+    if (name == "MemAvailable:") available = std::min(available, kib * 1024.0);
+    meminfo.ignore(64, '\n');
+  }
+  const double limit = cgroup_limit();
+  std::ifstream usage("/sys/fs/cgroup/memory.current");
+  double used;
+  if (limit > 0 && usage >> used) available = std::min(available, limit - used);
+  return 0.9 * std::max(available, 0.0);
 }
 
 ReconstructionEstimate check_resolution_fits(const OrientedPoints& points, int resolution, int threads,

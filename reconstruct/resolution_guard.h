@@ -24,8 +24,16 @@ struct ReconstructionEstimate {
 // Costs O(#points) time and memory, whatever R.
 ReconstructionEstimate estimate_reconstruction(const OrientedPoints& points, int resolution, int threads = 0);
 
+// Peak bytes of marching cubes over `cubes` touched cubes from `points` points
+// (the model behind estimate_reconstruction, for a brick of the grid).
+double reconstruction_bytes(double points, double cubes);
+
 // The memory this process may use: physical memory, or its cgroup's limit when lower.
 double machine_memory_bytes();
+
+// What this process may still take: the kernel's MemAvailable (or the
+// cgroup's limit less its usage, when lower), less a tenth as a margin.
+double available_memory_bytes();
 
 // Throws InputError when the estimate at options' resolution exceeds
 // `memory_bytes` (0: machine_memory_bytes()), before anything is allocated for

@@ -1,0 +1,576 @@
+#include "reconstruct/brick_reconstruction.h"
+
+#include "core/compact_mesh.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "io/atomic_file.h"
+#include "reconstruct/brick_surface.h"
+#include "reconstruct/hole_filling.h"
+#include "reconstruct/resolution_guard.h"
+#include "reconstruct/signed_distance.h"
+#include "reconstruct/welded_surface.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <numeric>
+
+namespace scan2lod {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Phase 0: the plan's key. Any change of points or options gives another key,
+// so a work folder of another build is never taken for this one's.
+std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
+  h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+  return h * 0xff51afd7ed558ccdull;
+}
+
+template <class T>
+std::uint64_t mix_bytes(std::uint64_t h, const std::vector<T>& values) {
+  const std::size_t bytes = values.size() * sizeof(T);
+  const unsigned char* p = reinterpret_cast<const unsigned char*>(values.data());
+  std::size_t i = 0;
+  for (; i + 8 <= bytes; i += 8) {
+    std::uint64_t w;
+    std::memcpy(&w, p + i, 8);
+    h = mix(h, w);
+  }
+  for (; i < bytes; ++i) h = mix(h, p[i]);
+  return mix(h, bytes);
+}
+
+std::uint64_t plan_key(const OrientedPoints& points, const ReconstructOptions& o, int brick_cubes) {
+  std::uint64_t h = 0x5332'4c42'524b'0001ull;  // format of the brick files
+  h = mix_bytes(h, points.positions);
+  h = mix_bytes(h, points.normals);
+  h = mix_bytes(h, points.colors);
+  h = mix_bytes(h, points.confidence);
+  h = mix_bytes(h, points.spacing);
+  const double values[] = {double(o.resolution), double(o.margin), o.reach, double(int(o.distance.method)),
+                           double(o.distance.neighbours), o.distance.kernel_width, o.distance.max_distance,
+                           double(brick_cubes)};
+  for (double v : values) {
+    std::uint64_t w;
+    std::memcpy(&w, &v, 8);
+    h = mix(h, w);
+  }
+  return h;
+}
+
+// How far a point's influence reaches, in world units. A corner is defined
+// only within max_distance scales of its closest point p0 (scale: max(cube,
+// spacing of p0)), and the planes kernel's weight exp(-(d² - d0²) / σ²) is
+// exactly 0 in float past 104 σ², so every point that changes a corner lies
+// within sqrt(max_distance² + 105 kernel²) scales of it; reach (2.5 scales)
+// is nearer. Vertex colours weigh 8 neighbours at σ = one cube from a
+// vertex up to a cube diagonal past a defined corner: four cube diagonals more
+// cover that.
+double influence_factor(const ReconstructOptions& o) {
+  const double d = o.distance.max_distance, k = o.distance.kernel_width;
+  return std::max(std::sqrt(d * d + 105.0 * k * k), double(o.reach));
+}
+
+// The halo every brick gets: margin seeds and the cube-sized part of the influence.
+double base_halo(const ReconstructOptions& o, double cube_size) {
+  const double diagonal = cube_size * std::sqrt(3.0);
+  return std::max(influence_factor(o) * cube_size + 4.0 * diagonal, (o.margin + 1) * diagonal);
+}
+
+int brick_of(const CubeGrid& grid, int brick_cubes, int per_axis, const Vec3f& p, const Vec3d& offset) {
+  const Vec3d g = ((p.cast<double>() + offset) - grid.origin) / (grid.cube_size * brick_cubes);
+  int b[3];
+  for (int a = 0; a < 3; ++a) b[a] = std::clamp(int(std::floor(g[a])), 0, per_axis - 1);
+  return (b[2] * per_axis + b[1]) * per_axis + b[0];
+}
+
+// Points per brick (own points only), largest first.
+std::size_t largest_brick(const OrientedPoints& points, const CubeGrid& grid, int brick_cubes, int per_axis) {
+  std::vector<std::uint32_t> bins;
+  for (const Vec3f& p : points.positions) bins.push_back(std::uint32_t(brick_of(grid, brick_cubes, per_axis, p, Vec3d::Zero())));
+  std::sort(bins.begin(), bins.end());
+  std::size_t worst = 0;
+  for (std::size_t i = 0; i < bins.size();) {
+    std::size_t j = i;
+    while (j < bins.size() && bins[j] == bins[i]) ++j;
+    worst = std::max(worst, j - i);
+    i = j;
+  }
+  return worst;
+}
+
+// The weld holds the whole surface: keys, positions, triangles and their
+// order, about 80 bytes a triangle at its peak; a touched cube gives about
+// one triangle. On disk a triangle takes about 32 bytes with its vertices.
+constexpr double kWeldBytesPerCube = 80.0;
+constexpr double kDiskBytesPerCube = 36.0;
+
+std::string megabytes(double bytes) { return std::to_string(std::llround(bytes / (1 << 20))) + " MiB"; }
+
+// ---- brick files -----------------------------------------------------------
+
+constexpr char kMagic[8] = {'S', '2', 'L', 'B', 'R', 'I', 'C', 'K'};
+
+template <class T>
+void put(std::ofstream& out, const std::vector<T>& v) {
+  const std::uint64_t n = v.size();
+  out.write(reinterpret_cast<const char*>(&n), 8);
+  out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(n * sizeof(T)));
+}
+
+template <class T>
+bool get(std::ifstream& in, std::vector<T>* v, std::uint64_t limit) {
+  std::uint64_t n = 0;
+  if (!in.read(reinterpret_cast<char*>(&n), 8) || n > limit / sizeof(T)) return false;
+  v->resize(n);
+  return bool(in.read(reinterpret_cast<char*>(v->data()), std::streamsize(n * sizeof(T))));
+}
+
+struct BrickFile {
+  std::vector<std::uint64_t> followed;
+  BrickSurface surface;
+};
+
+void write_brick(const std::string& path, std::uint64_t key, const BrickFile& b) {
+  write_atomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    out.write(kMagic, 8);
+    out.write(reinterpret_cast<const char*>(&key), 8);
+    const std::uint64_t counts[3] = {b.surface.cubes_touched, b.surface.corners_evaluated, b.surface.following_rounds};
+    out.write(reinterpret_cast<const char*>(counts), sizeof counts);
+    put(out, b.followed);
+    put(out, b.surface.vertex_edges);
+    put(out, b.surface.positions);
+    put(out, b.surface.colors);
+    put(out, b.surface.leaf_cubes);
+    put(out, b.surface.leaf_cases);
+    put(out, b.surface.requests);
+    put(out, b.surface.border_cubes);
+    out.flush();
+    if (!out) throw InputError(tmp, "cannot write the brick: " + std::string(std::strerror(errno)));
+  });
+}
+
+// A finished brick of this plan, or false (missing, another plan's, or cut short).
+bool read_brick(const std::string& path, std::uint64_t key, BrickFile* b) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::error_code ec;
+  const std::uint64_t size = fs::file_size(path, ec);
+  char magic[8];
+  std::uint64_t stored = 0, counts[3];
+  if (!in.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0) return false;
+  if (!in.read(reinterpret_cast<char*>(&stored), 8) || stored != key) return false;
+  if (!in.read(reinterpret_cast<char*>(counts), sizeof counts)) return false;
+  BrickSurface& s = b->surface;
+  s.cubes_touched = counts[0], s.corners_evaluated = counts[1], s.following_rounds = counts[2];
+  if (!get(in, &b->followed, size) || !get(in, &s.vertex_edges, size) || !get(in, &s.positions, size) ||
+      !get(in, &s.colors, size) || !get(in, &s.leaf_cubes, size) || !get(in, &s.leaf_cases, size) ||
+      !get(in, &s.requests, size) || !get(in, &s.border_cubes, size))
+    return false;
+  if (s.positions.size() != s.vertex_edges.size() || s.leaf_cubes.size() != s.leaf_cases.size()) return false;
+  if (!s.colors.empty() && s.colors.size() != s.positions.size()) return false;
+  return in.peek() == std::ifstream::traits_type::eof();
+}
+
+// ---- phases ----------------------------------------------------------------
+
+struct Bins {
+  std::vector<std::uint32_t> bricks;  // bricks that hold points, ascending
+  std::vector<std::size_t> first;     // their points run [first[i], first[i + 1]) in `points`
+  std::vector<std::uint32_t> points;  // ascending within a brick
+  // Per brick of the grid (all n³): no point outside this many world units
+  // reaches into the brick, under the normal limits and the relaxed ones of
+  // hole closing.
+  std::vector<float> halo, relaxed_halo;
+};
+
+// Phase 1: points by the brick they lie in, and each brick's halo: the base,
+// or the influence of any point whose influence reaches the brick (a point
+// of wide spacing, at a scan's grazing rim, reaches far).
+Bins bin_points(const OrientedPoints& points, const BrickPlan& plan, const ReconstructOptions& options) {
+  const int n = plan.bricks_per_axis;
+  const double h = plan.grid.cube_size, extra = 4.0 * h * std::sqrt(3.0);
+  ReconstructOptions relaxed = options;
+  relaxed.distance.max_distance *= 2.f;
+  const double factor = influence_factor(options), relaxed_factor = influence_factor(relaxed);
+  Bins bins;
+  bins.halo.assign(std::size_t(n) * n * n, float(plan.halo));
+  bins.relaxed_halo.assign(std::size_t(n) * n * n, float(relaxed_factor * h + extra));
+  std::vector<std::uint64_t> pairs(points.size());
+  const bool spaced = points.spacing.size() == points.size();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3f& p = points.positions[i];
+    pairs[i] = std::uint64_t(brick_of(plan.grid, plan.brick_cubes, n, p, Vec3d::Zero())) << 32 | i;
+    if (!spaced || points.spacing[i] <= h) continue;
+    const double reach = relaxed_factor * double(points.spacing[i]) + extra;
+    const Vec3d r = Vec3d::Constant(reach);
+    const int lo = brick_of(plan.grid, plan.brick_cubes, n, p, -r), hi = brick_of(plan.grid, plan.brick_cubes, n, p, r);
+    const float normal = float(factor * double(points.spacing[i]) + extra);
+    for (int z = lo / (n * n); z <= hi / (n * n); ++z)
+      for (int y = lo / n % n; y <= hi / n % n; ++y)
+        for (int x = lo % n; x <= hi % n; ++x) {
+          const std::size_t b = (std::size_t(z) * n + y) * n + x;
+          bins.halo[b] = std::max(bins.halo[b], normal);
+          bins.relaxed_halo[b] = std::max(bins.relaxed_halo[b], float(reach));
+        }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  bins.points.resize(pairs.size());
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const std::uint32_t b = std::uint32_t(pairs[i] >> 32);
+    if (bins.bricks.empty() || bins.bricks.back() != b) bins.bricks.push_back(b), bins.first.push_back(i);
+    bins.points[i] = std::uint32_t(pairs[i]);
+  }
+  bins.first.push_back(pairs.size());
+  return bins;
+}
+
+// A brick's points with its halo, in their input order.
+OrientedPoints gather(const OrientedPoints& all, const Bins& bins, const BrickPlan& plan, std::uint32_t brick,
+                      double halo) {
+  const int n = plan.bricks_per_axis, B = plan.brick_cubes;
+  const int b[3] = {int(brick) % n, int(brick) / n % n, int(brick) / (n * n)};
+  const double side = plan.grid.cube_size * B;
+  Vec3d lo, hi;
+  int from[3], to[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = plan.grid.origin[a] + side * b[a] - halo;
+    hi[a] = plan.grid.origin[a] + side * (b[a] + 1) + halo;
+    from[a] = std::max(0, int(std::floor((lo[a] - plan.grid.origin[a]) / side)));
+    to[a] = std::min(n - 1, int(std::floor((hi[a] - plan.grid.origin[a]) / side)));
+  }
+  std::vector<std::uint32_t> ids;
+  for (int z = from[2]; z <= to[2]; ++z)
+    for (int y = from[1]; y <= to[1]; ++y)
+      for (int x = from[0]; x <= to[0]; ++x) {
+        const std::uint32_t cell = std::uint32_t((z * n + y) * n + x);
+        const auto it = std::lower_bound(bins.bricks.begin(), bins.bricks.end(), cell);
+        if (it == bins.bricks.end() || *it != cell) continue;
+        const std::size_t c = std::size_t(it - bins.bricks.begin());
+        for (std::size_t k = bins.first[c]; k < bins.first[c + 1]; ++k) {
+          const Vec3d p = all.positions[bins.points[k]].cast<double>();
+          if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) ids.push_back(bins.points[k]);
+        }
+      }
+  std::sort(ids.begin(), ids.end());
+  OrientedPoints p;
+  auto take = [&](const auto& from_values, auto* to_values) {
+    if (from_values.size() != all.size()) return;
+    to_values->resize(ids.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) (*to_values)[i] = from_values[ids[i]];
+  };
+  take(all.positions, &p.positions);
+  take(all.normals, &p.normals);
+  take(all.colors, &p.colors);
+  take(all.confidence, &p.confidence);
+  take(all.spacing, &p.spacing);
+  return p;
+}
+
+CubeRegion region_of(const BrickPlan& plan, std::uint32_t brick) {
+  const int n = plan.bricks_per_axis, b[3] = {int(brick) % n, int(brick) / n % n, int(brick) / (n * n)};
+  CubeRegion r;
+  for (int a = 0; a < 3; ++a) {
+    r.lo[a] = b[a] * plan.brick_cubes;
+    r.hi[a] = std::min(plan.grid.resolution, r.lo[a] + plan.brick_cubes);
+  }
+  return r;
+}
+
+std::uint32_t brick_of_cube(const BrickPlan& plan, std::uint64_t cube) {
+  int x, y, z;
+  unpack_key(cube, &x, &y, &z);
+  const int n = plan.bricks_per_axis, B = plan.brick_cubes;
+  return std::uint32_t((z / B * n + y / B) * n + x / B);
+}
+
+// The brick whose cubes have this lattice point as lower corner (the last
+// brick for points on the grid's upper faces).
+std::uint32_t brick_of_corner(const BrickPlan& plan, std::uint64_t corner) {
+  int xyz[3];
+  unpack_key(corner, &xyz[0], &xyz[1], &xyz[2]);
+  const int n = plan.bricks_per_axis, B = plan.brick_cubes;
+  for (int& c : xyz) c = std::min(c / B, n - 1);
+  return std::uint32_t((xyz[2] * n + xyz[1]) * n + xyz[0]);
+}
+
+std::string brick_path(const std::string& dir, std::uint32_t brick) {
+  char name[32];
+  std::snprintf(name, sizeof name, "%08u.brick", brick);
+  return (fs::path(dir) / name).string();
+}
+
+// Runs work(points, index) over a brick's points and a halo that starts at
+// `halo` and widens to what the work reports it needed (the radius within
+// which every point that decided one of its values lies), which then
+// suffices. `far`: no point outside reaches farther into the brick. Returns
+// the runs it took.
+template <class Work>
+std::size_t with_brick_points(const OrientedPoints& all, const Bins& bins, const BrickPlan& plan,
+                              std::uint32_t brick, double halo, double far, Work work, double* widest) {
+  for (std::size_t runs = 1;; ++runs) {
+    const OrientedPoints sub = gather(all, bins, plan, brick, halo);
+    *widest = std::max(*widest, halo);
+    if (sub.size() == 0 && halo < far) {
+      halo = far;
+      continue;
+    }
+    const double needed = work(sub);
+    if (needed <= halo) return runs;
+    halo = needed * (1 + 1e-6);
+  }
+}
+
+}  // namespace
+
+BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& options, const BrickOptions& bricks) {
+  if (points.size() == 0) throw InputError("", "no input points: nothing to reconstruct");
+  if (points.size() >= (std::size_t(1) << 32))
+    throw InputError("", "more than 2^32 points in one build: split the input");
+  BrickPlan plan;
+  plan.grid = make_cube_grid(bounds(points.positions), options.resolution);
+  const int R = options.resolution;
+  plan.halo = base_halo(options, plan.grid.cube_size);
+  const int halo_cubes = int(std::ceil(plan.halo / plan.grid.cube_size));
+  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  const ReconstructionEstimate whole = estimate_reconstruction(points, R, threads);
+  const double budget = bricks.memory_bytes > 0 ? bricks.memory_bytes : machine_memory_bytes();
+  const int smallest = std::min(R, std::max(16, 1 << int(std::ceil(std::log2(4.0 * halo_cubes)))));
+  auto brick_bytes = [&](int B) {
+    const int n = (R + B - 1) / B;
+    const double share = double(largest_brick(points, plan.grid, B, n)) / double(points.size());
+    const double grown = std::pow(double(B + 2 * halo_cubes) / double(B), 2.0);
+    return reconstruction_bytes(share * grown * double(points.size()), share * whole.cubes);
+  };
+  int B = bricks.brick_cubes;
+  if (B > 0) {
+    if (B & (B - 1) || B < 16) throw InputError("", "brick size " + std::to_string(B) + ": expected a power of two >= 16");
+    B = std::min(B, R);
+  } else {
+    for (B = R; B > smallest && brick_bytes(B) > budget; B /= 2) {}
+    if (brick_bytes(B) > budget)
+      throw InputError("", "--memory " + megabytes(budget) + " is below what one brick needs at resolution " +
+                               std::to_string(R) + ": at least " + megabytes(brick_bytes(B)) + " (bricks of " +
+                               std::to_string(B) + " cubes, each with a halo of " + std::to_string(halo_cubes) +
+                               " cubes)");
+  }
+  plan.brick_cubes = B;
+  plan.bricks_per_axis = (R + B - 1) / B;
+  plan.brick_bytes = brick_bytes(B);
+  plan.weld_bytes = kWeldBytesPerCube * whole.cubes + 40.0 * double(points.size());
+  plan.disk_bytes = kDiskBytesPerCube * whole.cubes * (1.0 + 0.1 * double(plan.bricks_per_axis));
+  plan.key = plan_key(points, options, B);
+  return plan;
+}
+
+Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const ReconstructOptions& options,
+                                     const BrickOptions& brick_options, BrickStats* stats_out) {
+  using clock = std::chrono::steady_clock;
+  auto lap = [t = clock::now()]() mutable {
+    const auto now = clock::now();
+    const double s = std::chrono::duration<double>(now - t).count();
+    t = now;
+    return s;
+  };
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!points.positions[i].allFinite() || !points.normals[i].allFinite())
+      throw InputError("", "input point " + std::to_string(i) + " has non-finite coordinates or normal");
+  const BrickPlan plan = plan_bricks(points, options, brick_options);
+  Reconstruction result;
+  ReconstructStats& stats = result.stats;
+  stats.points = points.size();
+  const std::string advice = coarse_input_advice(points, options.resolution);
+  if (!advice.empty()) result.warnings.push_back(advice);
+
+  // The work folder, with room for the bricks.
+  const std::string dir = (fs::path(brick_options.work_dir) / "bricks").string();
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError(brick_options.work_dir, "cannot make the work folder: " + ec.message());
+  // What a killed build was writing: never a finished brick (those are renamed into place).
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.path().filename().string().rfind(".tmp-", 0) == 0) fs::remove(entry.path(), ec);
+  const fs::space_info space = fs::space(dir, ec);
+  if (!ec && double(space.available) < plan.disk_bytes)
+    throw InputError(brick_options.work_dir, "the bricks need about " + megabytes(plan.disk_bytes) + " of disk and " +
+                                                 megabytes(double(space.available)) + " are free there");
+
+  const Bins bins = bin_points(points, plan, options);
+  const double relaxed_halo = bins.relaxed_halo.empty() ? plan.halo : double(*std::min_element(
+                                                                          bins.relaxed_halo.begin(), bins.relaxed_halo.end()));
+  stats.seconds_index = lap();
+
+  // Phases 2 and 3: bricks run, and run again with the cubes their neighbours'
+  // surfaces lead into, until no brick asks another for a cube it lacks.
+  // Margin seeds reach out of a point's own brick, so with a margin every
+  // brick whose halo holds points runs; else the bricks that hold points.
+  struct State {
+    std::vector<std::uint64_t> wanted, followed, requests, border;
+    bool pending = false, done = false, empty = false;
+  };
+  std::map<std::uint32_t, State> bricks;
+  for (std::uint32_t b : bins.bricks) bricks[b].pending = true;
+  if (options.margin > 0)
+    for (std::uint32_t b = 0; b < bins.halo.size(); ++b) bricks[b].pending = true;
+  BrickStats bs;
+  const double cubes_per_point = estimate_reconstruction(points, options.resolution).cubes / double(points.size());
+  Progress progress("bricks", bricks.size());
+  for (;;) {
+    bool ran = false;
+    for (auto& [brick, state] : bricks) {
+      if (!state.pending) continue;
+      state.pending = false;
+      ran = true;
+      const std::string path = brick_path(dir, brick);
+      BrickFile file;
+      const bool resumed = read_brick(path, plan.key, &file) &&
+                           std::includes(file.followed.begin(), file.followed.end(), state.wanted.begin(),
+                                         state.wanted.end());
+      if (resumed) {
+        ++bs.bricks_resumed;
+      } else {
+        // The base halo first; where a value needs more (points of wide
+        // spacing nearby), again with what it needs.
+        file.followed = state.wanted;
+        bs.brick_runs += with_brick_points(points, bins, plan, brick, plan.halo, bins.halo[brick],
+                                           [&](const OrientedPoints& sub) {
+          file.surface = reconstruct_brick(sub, plan.grid, region_of(plan, brick), file.followed,
+                                           cubes_per_point * double(sub.size()), bins.halo[brick], options);
+          return double(file.surface.needed_halo);
+        }, &bs.widest_halo);
+        write_brick(path, plan.key, file);
+      }
+      state.followed = std::move(file.followed);
+      state.requests = std::move(file.surface.requests);
+      state.border = std::move(file.surface.border_cubes);
+      if (!state.done) progress.advance(), state.done = true;
+    }
+    if (!ran) break;
+    ++bs.follow_passes;
+    // Requests a brick has not met yet make it run again.
+    std::vector<std::pair<std::uint32_t, std::uint64_t>> asked;
+    for (const auto& [brick, state] : bricks)
+      for (std::uint64_t cube : state.requests) asked.push_back({brick_of_cube(plan, cube), cube});
+    for (const auto& [target, cube] : asked) {
+      State& t = bricks[target];
+      if (t.done && (std::binary_search(t.border.begin(), t.border.end(), cube) ||
+                     std::binary_search(t.followed.begin(), t.followed.end(), cube)))
+        continue;
+      if (std::binary_search(t.wanted.begin(), t.wanted.end(), cube)) continue;
+      t.wanted.insert(std::upper_bound(t.wanted.begin(), t.wanted.end(), cube), cube);
+      t.pending = true;
+    }
+  }
+  progress.finish();
+  stats.seconds_distances = lap();
+
+  // Phase 4: the bricks welded by lattice edge, and cleaned up as in core.
+  WeldedSurface surface(plan.grid);
+  for (const auto& [brick, state] : bricks) {
+    BrickFile file;
+    if (!read_brick(brick_path(dir, brick), plan.key, &file))
+      throw InputError(brick_path(dir, brick), "a finished brick changed or vanished during the build");
+    const BrickSurface& s = file.surface;
+    surface.add_vertices(s.vertex_edges, s.positions, s.colors);
+    surface.add_leaves(s.leaf_cubes, s.leaf_cases);
+    stats.cubes_touched += s.cubes_touched;
+    stats.corners_evaluated += s.corners_evaluated;
+    stats.following_rounds = std::max(stats.following_rounds, s.following_rounds);
+  }
+  surface.weld();
+  stats.cubes_emitting = surface.leaves();
+  stats.seconds_emit = lap();
+
+  // Pieces and holes. Corners of cubes grown into holes are evaluated under
+  // the relaxed limits by the brick they lie in, with its points.
+  ReconstructOptions relaxed = options;
+  relaxed.distance.max_distance *= 2.f;
+  const float h = float(plan.grid.cube_size);
+  auto evaluate = [&](const std::vector<std::uint64_t>& corners, std::vector<float>* values) {
+    values->assign(corners.size(), std::numeric_limits<float>::quiet_NaN());
+    std::map<std::uint32_t, std::vector<std::size_t>> by_brick;
+    for (std::size_t i = 0; i < corners.size(); ++i) by_brick[brick_of_corner(plan, corners[i])].push_back(i);
+    for (const auto& [brick, members] : by_brick) {
+      std::vector<Vec3f> queries;
+      for (std::size_t i : members) {
+        int x, y, z;
+        unpack_key(corners[i], &x, &y, &z);
+        queries.push_back(plan.grid.corner_position(x, y, z));
+      }
+      with_brick_points(points, bins, plan, brick, relaxed_halo, bins.relaxed_halo[brick],
+                        [&](const OrientedPoints& sub) {
+        if (sub.size() == 0) return 0.0;
+        const PointIndex index(sub);
+        std::vector<float> d, needed;
+        std::vector<std::int32_t> nearest;
+        signed_distances(sub, index, queries, h, relaxed.distance, options.threads, &d, &nearest, nullptr, &needed);
+        double widest = 0;
+        for (std::size_t j = 0; j < members.size(); ++j) {
+          (*values)[members[j]] = d[j];
+          widest = std::max(widest, double(std::isnan(d[j]) ? std::min(needed[j], bins.relaxed_halo[brick]) : needed[j]));
+        }
+        return widest;
+      }, &bs.widest_halo);
+    }
+  };
+  stats.triangles_dropped += surface.drop_small_pieces(options.min_piece);
+  const std::size_t max_edges = std::size_t(options.max_hole * options.resolution);
+  if (options.max_hole > 0.0) {
+    for (int round = 0; round < options.hole_rounds; ++round) {
+      const std::size_t grown = surface.grow_into_small_holes(max_edges, evaluate);
+      stats.cubes_hole_closing += grown;
+      if (grown == 0) break;
+    }
+    surface.give_up_open_growth();
+    stats.triangles_dropped += surface.drop_small_pieces(options.min_piece);
+  }
+  TriangleMesh& mesh = result.mesh;
+  std::vector<std::array<std::int32_t, 2>> boundary;
+  std::vector<std::int32_t> grown_vertices;
+  surface.finish(&mesh, &boundary, &grown_vertices);
+  if (options.max_hole > 0.0) {
+    const std::vector<Triangle> patch = fill_small_holes(mesh, boundary, max_edges);
+    mesh.triangles.insert(mesh.triangles.end(), patch.begin(), patch.end());
+    stats.patch_triangles = patch.size();
+  }
+  // Colours of the vertices growth added, from the points of their brick.
+  if (points.has_colors() && !grown_vertices.empty()) {
+    std::map<std::uint32_t, std::vector<std::int32_t>> by_brick;
+    for (std::int32_t v : grown_vertices)
+      by_brick[std::uint32_t(brick_of(plan.grid, plan.brick_cubes, plan.bricks_per_axis, mesh.positions[v],
+                                      Vec3d::Zero()))].push_back(v);
+    for (const auto& [brick, members] : by_brick) {
+      std::vector<Vec3f> at;
+      for (std::int32_t v : members) at.push_back(mesh.positions[v]);
+      with_brick_points(points, bins, plan, brick, plan.halo, bins.halo[brick], [&](const OrientedPoints& sub) {
+        if (sub.size() == 0) return 0.0;
+        const PointIndex index(sub);
+        std::vector<float> needed;
+        const std::vector<Rgb> c = vertex_colors(sub, index, at, h, options.threads, &needed);
+        for (std::size_t j = 0; j < members.size(); ++j) mesh.colors[members[j]] = c[j];
+        return double(*std::max_element(needed.begin(), needed.end()));
+      }, &bs.widest_halo);
+    }
+  }
+  TriangleMesh compact = compact_mesh(mesh.positions, {}, mesh.colors, {&mesh.triangles});
+  compact.triangles = std::move(mesh.triangles);
+  mesh = std::move(compact);
+  stats.seconds_cleanup = lap();
+  mesh.normals = vertex_normals(mesh);
+  stats.seconds_attributes = lap();
+  bs.bricks = bricks.size();
+  if (stats_out) *stats_out = bs;
+  return result;
+}
+
+}  // namespace scan2lod

@@ -1,0 +1,60 @@
+// Reconstruction brick by brick, for surfaces whose marching cubes do not fit
+// in memory at once. The grid is the one reconstruct() uses; it is cut into
+// bricks of B^3 cubes, and each brick is followed and emitted from its own
+// points plus a halo of neighbours wide enough that every signed distance it
+// needs is the one the whole point set gives. Bricks hand each other the cubes
+// their surface leads into until none is left, so the followed set is the
+// whole grid's. Vertices are keyed by their lattice edge, so the bricks' shares
+// weld exactly; small pieces are then dropped on the welded whole.
+//
+// Finished bricks are kept in a work folder, written atomically, so a build
+// that is killed resumes from them and ends with the same surface.
+#pragma once
+
+#include "reconstruct/marching_cubes.h"
+
+#include <string>
+
+namespace scan2lod {
+
+struct BrickOptions {
+  std::string work_dir;      // finished bricks are kept here; created if missing
+  double memory_bytes = 0;   // one brick's work must fit; 0: the machine's
+  int brick_cubes = 0;       // cubes per brick side (a power of two); 0: from memory_bytes
+};
+
+struct BrickPlan {
+  CubeGrid grid;
+  int brick_cubes = 0;       // B
+  int bricks_per_axis = 0;   // ceil(R / B)
+  double halo = 0;           // world units of neighbours around a brick, at least (bricks near
+                             // points of wide spacing get more: their influence reaches farther)
+  std::size_t bricks = 0;    // bricks that hold points
+  double brick_bytes = 0;    // estimated peak of the largest brick
+  double weld_bytes = 0;     // estimated peak of welding the surface
+  double disk_bytes = 0;     // estimated size of the finished bricks
+  std::uint64_t key = 0;     // hash of the points and options: a brick of another plan is never reused
+};
+
+// The bricks for `points` at options.resolution within options' memory.
+// Throws InputError when not even the smallest brick (4 halos wide) fits,
+// naming the memory it needs.
+BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& options, const BrickOptions& bricks);
+
+struct BrickStats {
+  std::size_t bricks = 0;          // bricks with points
+  std::size_t brick_runs = 0;      // runs, with the reruns that requests and wider halos caused
+  std::size_t bricks_resumed = 0;  // taken from the work folder as they were
+  std::size_t follow_passes = 0;   // passes until no brick asked another for a cube
+  double widest_halo = 0;          // world units: near points of wide spacing a halo grows
+};
+
+// The surface of reconstruct(points, options), built brick by brick. Same
+// triangles and positions as in core when options.max_hole is 0; with hole
+// closing, holes are closed by rim triangles only (fill_small_holes), not by
+// marching on into cubes. `leaves` stays empty: the octree needs the in-core
+// build.
+Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const ReconstructOptions& options,
+                                     const BrickOptions& bricks, BrickStats* stats = nullptr);
+
+}  // namespace scan2lod

@@ -1,0 +1,366 @@
+#include "reconstruct/welded_surface.h"
+
+#include "reconstruct/cube_table.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace scan2lod {
+namespace {
+
+constexpr std::uint64_t kAxisStep[3] = {1ull, 1ull << 20, 1ull << 40};
+
+std::uint64_t corner_key_of(std::uint64_t cube, int corner) {
+  return cube + (corner & 1) * kAxisStep[0] + ((corner >> 1) & 1) * kAxisStep[1] + ((corner >> 2) & 1) * kAxisStep[2];
+}
+
+std::uint64_t edge_key_of(std::uint64_t cube, int edge) {
+  return (corner_key_of(cube, edge_corner(edge, 0)) << 2) | std::uint64_t(edge / 4);
+}
+
+// The face (axis * 2 + side) of a cube that holds both local edges, or -1.
+const std::array<std::array<std::int8_t, 12>, 12>& face_of() {
+  static const auto table = [] {
+    std::array<std::array<std::int8_t, 12>, 12> f{};
+    for (int i = 0; i < 12; ++i)
+      for (int j = 0; j < 12; ++j) {
+        f[i][j] = -1;
+        if (i == j) continue;
+        for (int axis = 0; axis < 3 && f[i][j] < 0; ++axis)
+          for (int side = 0; side < 2; ++side) {
+            bool both = true;
+            for (int e : {i, j})
+              for (int end = 0; end < 2; ++end) both &= ((edge_corner(e, end) >> axis) & 1) == side;
+            if (both) {
+              f[i][j] = std::int8_t(axis * 2 + side);
+              break;
+            }
+          }
+      }
+    return f;
+  }();
+  return table;
+}
+
+struct UnionFind {
+  std::vector<std::int32_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  std::int32_t find(std::int32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::int32_t a, std::int32_t b) { parent[find(a)] = find(b); }
+};
+
+}  // namespace
+
+void WeldedSurface::add_vertices(const std::vector<std::uint64_t>& edges, const std::vector<Vec3f>& positions,
+                                 const std::vector<Rgb>& colors) {
+  vertex_edge_.insert(vertex_edge_.end(), edges.begin(), edges.end());
+  positions_.insert(positions_.end(), positions.begin(), positions.end());
+  colors_.insert(colors_.end(), colors.begin(), colors.end());
+}
+
+void WeldedSurface::add_leaves(const std::vector<std::uint64_t>& cubes, const std::vector<std::uint8_t>& cases) {
+  leaf_cube_.insert(leaf_cube_.end(), cubes.begin(), cubes.end());
+  leaf_case_.insert(leaf_case_.end(), cases.begin(), cases.end());
+}
+
+void WeldedSurface::weld() {
+  // Vertices: one per lattice edge (bricks sharing a face computed it alike).
+  std::vector<std::int32_t> order(vertex_edge_.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+    return vertex_edge_[a] < vertex_edge_[b] || (vertex_edge_[a] == vertex_edge_[b] && a < b);
+  });
+  std::vector<std::uint64_t> edges;
+  std::vector<Vec3f> positions;
+  std::vector<Rgb> colors;
+  const bool colored = colors_.size() == positions_.size() && !colors_.empty();
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    if (i > 0 && vertex_edge_[order[i]] == vertex_edge_[order[i - 1]]) continue;
+    edges.push_back(vertex_edge_[order[i]]);
+    positions.push_back(positions_[order[i]]);
+    if (colored) colors.push_back(colors_[order[i]]);
+  }
+  vertex_edge_ = std::move(edges);
+  positions_ = std::move(positions);
+  colors_ = std::move(colors);
+  welded_vertices_ = vertex_edge_.size();
+  // Leaves: each cube is emitted by one brick only; sorted by cube.
+  std::vector<std::int32_t> by_cube(leaf_cube_.size());
+  std::iota(by_cube.begin(), by_cube.end(), 0);
+  std::sort(by_cube.begin(), by_cube.end(), [&](std::int32_t a, std::int32_t b) { return leaf_cube_[a] < leaf_cube_[b]; });
+  std::vector<std::uint64_t> cubes(by_cube.size());
+  std::vector<std::uint8_t> cases(by_cube.size());
+  for (std::size_t i = 0; i < by_cube.size(); ++i) cubes[i] = leaf_cube_[by_cube[i]], cases[i] = leaf_case_[by_cube[i]];
+  leaf_cube_ = std::move(cubes);
+  leaf_case_ = std::move(cases);
+  leaf_mask_.resize(leaf_cube_.size());
+  leaf_alive_.assign(leaf_cube_.size(), 1);
+  leaf_index_ = FlatHashMap(leaf_cube_.size());
+  live_triangles_ = 0;
+  for (std::size_t l = 0; l < leaf_cube_.size(); ++l) {
+    leaf_index_.insert(leaf_cube_[l], std::int32_t(l));
+    leaf_mask_[l] = full_mask(std::int32_t(l));
+    live_triangles_ += std::size_t(cube_cases()[leaf_case_[l]].triangle_count);
+  }
+  find_open_edges();
+}
+
+std::uint16_t WeldedSurface::full_mask(std::int32_t leaf) const {
+  return std::uint16_t((1u << cube_cases()[leaf_case_[leaf]].triangle_count) - 1);
+}
+
+std::int32_t WeldedSurface::vertex_of(std::uint64_t edge) const {
+  const auto it = std::lower_bound(vertex_edge_.begin(), vertex_edge_.begin() + std::ptrdiff_t(welded_vertices_), edge);
+  if (it != vertex_edge_.begin() + std::ptrdiff_t(welded_vertices_) && *it == edge)
+    return std::int32_t(it - vertex_edge_.begin());
+  return grown_vertex_.find(edge);
+}
+
+std::int32_t WeldedSurface::add_grown_vertex(std::uint64_t edge, const Vec3f& position) {
+  const std::int32_t v = vertex_of(edge);
+  if (v >= 0) return v;
+  const std::int32_t fresh = std::int32_t(vertex_edge_.size());
+  grown_vertex_.insert(edge, fresh);
+  vertex_edge_.push_back(edge);
+  positions_.push_back(position);
+  if (!colors_.empty()) colors_.push_back(Rgb{0, 0, 0});
+  return fresh;
+}
+
+// visit(slot, {v0, v1, v2}, {e0, e1, e2}) for each kept triangle of a leaf.
+template <class Visit>
+void WeldedSurface::for_each_triangle(std::int32_t leaf, Visit visit) const {
+  const CubeCase& cc = cube_cases()[leaf_case_[leaf]];
+  for (int t = 0; t < cc.triangle_count; ++t) {
+    if (!(leaf_mask_[leaf] >> t & 1)) continue;
+    std::array<std::int32_t, 3> v;
+    std::array<int, 3> e;
+    for (int k = 0; k < 3; ++k) e[k] = cc.triangles[t][k], v[k] = vertex_of(edge_key_of(leaf_cube_[leaf], e[k]));
+    visit(t, v, e);
+  }
+}
+
+bool WeldedSurface::emitting(std::uint64_t cube) const {
+  const std::int32_t l = leaf_index_.find(cube);
+  return l >= 0 && leaf_alive_[l];
+}
+
+bool WeldedSurface::neighbour_key(std::uint64_t cube, int face, std::uint64_t* key) const {
+  const int axis = face / 2, side = face % 2;
+  int xyz[3];
+  unpack_key(cube, &xyz[0], &xyz[1], &xyz[2]);
+  const int n = xyz[axis] + (side ? 1 : -1);
+  if (n < 0 || n >= grid_.resolution) return false;
+  *key = side ? cube + kAxisStep[axis] : cube - kAxisStep[axis];
+  return true;
+}
+
+// Open: a triangle edge on a cube face whose cube across emits nothing (two
+// cubes sharing a face join its crossings alike).
+void WeldedSurface::find_open_edges() {
+  open_.clear();
+  const auto& faces = face_of();
+  for (std::size_t l = 0; l < leaf_cube_.size(); ++l) {
+    if (!leaf_alive_[l]) continue;
+    for_each_triangle(std::int32_t(l), [&](int, const std::array<std::int32_t, 3>& v, const std::array<int, 3>& e) {
+      for (int k = 0; k < 3; ++k) {
+        const int face = faces[e[k]][e[(k + 1) % 3]];
+        std::uint64_t n;
+        if (face < 0) continue;
+        if (neighbour_key(leaf_cube_[l], face, &n) && emitting(n)) continue;
+        open_.push_back({v[k], v[(k + 1) % 3], std::int32_t(l), face});
+      }
+    });
+  }
+}
+
+std::size_t WeldedSurface::drop_small_pieces(double fraction) {
+  if (fraction <= 0.0 || live_triangles_ == 0) return 0;
+  UnionFind uf(positions_.size());
+  std::vector<std::int32_t> size(positions_.size(), 0);
+  for (std::size_t l = 0; l < leaf_cube_.size(); ++l)
+    if (leaf_alive_[l])
+      for_each_triangle(std::int32_t(l), [&](int, const std::array<std::int32_t, 3>& v, const std::array<int, 3>&) {
+        uf.unite(v[0], v[1]), uf.unite(v[1], v[2]);
+      });
+  for (std::size_t l = 0; l < leaf_cube_.size(); ++l)
+    if (leaf_alive_[l])
+      for_each_triangle(std::int32_t(l), [&](int, const std::array<std::int32_t, 3>& v, const std::array<int, 3>&) {
+        ++size[uf.find(v[0])];
+      });
+  const double limit = fraction * double(live_triangles_);
+  std::size_t dropped = 0;
+  for (std::size_t l = 0; l < leaf_cube_.size(); ++l) {
+    if (!leaf_alive_[l]) continue;
+    std::uint16_t mask = leaf_mask_[l];
+    for_each_triangle(std::int32_t(l), [&](int t, const std::array<std::int32_t, 3>& v, const std::array<int, 3>&) {
+      if (size[uf.find(v[0])] < limit) mask &= std::uint16_t(~(1u << t)), ++dropped;
+    });
+    leaf_mask_[l] = mask;
+    if (mask == 0) leaf_alive_[l] = 0;
+  }
+  live_triangles_ -= dropped;
+  if (dropped) find_open_edges();
+  return dropped;
+}
+
+std::int32_t WeldedSurface::new_hole() {
+  hole_parent_.push_back(std::int32_t(hole_parent_.size()));
+  return hole_parent_.back();
+}
+
+std::int32_t WeldedSurface::find_hole(std::int32_t h) {
+  while (hole_parent_[h] != h) h = hole_parent_[h] = hole_parent_[hole_parent_[h]];
+  return h;
+}
+
+std::size_t WeldedSurface::grow_into_small_holes(std::size_t max_edges, const CornerEvaluator& evaluate) {
+  if (open_.empty()) return 0;
+  // Loops of the open edges, over their own vertices.
+  FlatHashMap local(open_.size() * 2);
+  UnionFind loops(0);
+  auto local_id = [&](std::int32_t v) {
+    const std::int32_t fresh = std::int32_t(loops.parent.size());
+    const std::int32_t id = local.insert(std::uint64_t(v), fresh);
+    if (id == fresh) loops.parent.push_back(fresh);
+    return id;
+  };
+  for (const OpenEdge& e : open_) loops.unite(local_id(e.a), local_id(e.b));
+  std::vector<std::int32_t> loop_edges(loops.parent.size(), 0);
+  for (const OpenEdge& e : open_) ++loop_edges[loops.find(local.find(std::uint64_t(e.a)))];
+  std::vector<std::int32_t> loop_hole(loops.parent.size(), -1);
+  for (const OpenEdge& e : open_) {
+    const std::int32_t root = loops.find(local.find(std::uint64_t(e.a)));
+    if (std::size_t(loop_edges[root]) > max_edges) continue;
+    if (loop_hole[root] < 0) loop_hole[root] = new_hole();
+    const std::int32_t own = grown_.find(leaf_cube_[e.leaf]);
+    if (own >= 0) hole_parent_[find_hole(loop_hole[root])] = find_hole(own);
+  }
+  // The cubes across small loops' open faces that never emitted (a cube
+  // whose leaf a dropped piece took is not grown into: its corners are
+  // defined and it stays out, as in core) and were not grown before.
+  // A cube across two holes' edges joins the hole named last, as in core.
+  std::vector<std::uint64_t> grow;
+  FlatHashMap hole_of(64);
+  for (const OpenEdge& e : open_) {
+    const std::int32_t root = loops.find(local.find(std::uint64_t(e.a)));
+    if (loop_hole[root] < 0) continue;
+    std::uint64_t key;
+    if (!neighbour_key(leaf_cube_[e.leaf], e.face, &key)) continue;
+    if (grown_.find(key) >= 0 || leaf_index_.find(key) >= 0) continue;  // grown before, or a leaf dead or alive
+    grow.push_back(key);
+    hole_of.assign(key, loop_hole[root]);
+  }
+  std::sort(grow.begin(), grow.end());
+  grow.erase(std::unique(grow.begin(), grow.end()), grow.end());
+  if (grow.empty()) return 0;
+  for (std::uint64_t key : grow) grown_.assign(key, hole_of.find(key));
+  // Their corners under the relaxed limits.
+  std::vector<std::uint64_t> corners;
+  for (std::uint64_t cube : grow)
+    for (int k = 0; k < 8; ++k) {
+      const std::uint64_t c = corner_key_of(cube, k);
+      if (corner_index_.find(c) < 0) corners.push_back(c);
+    }
+  std::sort(corners.begin(), corners.end());
+  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  std::vector<float> values;
+  evaluate(corners, &values);
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    corner_index_.insert(corners[i], std::int32_t(corner_values_.size()));
+    corner_values_.push_back(values[i]);
+  }
+  // Each grown cube with all corners defined and a sign change emits all its
+  // case's triangles; new vertices sit at the corners' ratio, as in core.
+  const auto& table = cube_cases();
+  for (std::uint64_t cube : grow) {
+    grown_list_.push_back(cube);
+    float d[8];
+    std::uint8_t mask = 0;
+    bool defined = true;
+    for (int k = 0; k < 8; ++k) {
+      d[k] = corner_values_[corner_index_.find(corner_key_of(cube, k))];
+      defined &= !std::isnan(d[k]);
+      mask |= std::uint8_t(d[k] < 0.f) << k;
+    }
+    if (!defined || mask == 0 || mask == 255) continue;
+    const CubeCase& cc = table[mask];
+    if (cc.triangle_count == 0) continue;
+    for (int e = 0; e < 12; ++e) {
+      if (!(cc.edge_mask >> e & 1)) continue;
+      const float da = d[edge_corner(e, 0)], db = d[edge_corner(e, 1)];
+      const float ratio = std::clamp(std::fabs(da) / (std::fabs(da) + std::fabs(db)), 1e-4f, 1.f - 1e-4f);
+      const std::uint64_t lower = corner_key_of(cube, edge_corner(e, 0));
+      int x, y, z;
+      unpack_key(lower, &x, &y, &z);
+      Vec3f p = grid_.corner_position(x, y, z);
+      p[e / 4] += ratio * h_;
+      add_grown_vertex(edge_key_of(cube, e), p);
+    }
+    const std::int32_t leaf = std::int32_t(leaf_cube_.size());
+    leaf_cube_.push_back(cube);
+    leaf_case_.push_back(mask);
+    leaf_mask_.push_back(0);
+    leaf_alive_.push_back(1);
+    leaf_mask_.back() = full_mask(leaf);
+    leaf_index_.insert(cube, leaf);
+    live_triangles_ += cc.triangle_count;
+  }
+  find_open_edges();
+  return grow.size();
+}
+
+std::size_t WeldedSurface::give_up_open_growth() {
+  std::vector<std::uint8_t> open(hole_parent_.size(), 0);
+  for (const OpenEdge& e : open_) {
+    const std::int32_t own = grown_.find(leaf_cube_[e.leaf]);
+    if (own >= 0) open[find_hole(own)] = 1;
+    std::uint64_t n;
+    if (neighbour_key(leaf_cube_[e.leaf], e.face, &n)) {
+      const std::int32_t across = grown_.find(n);
+      if (across >= 0) open[find_hole(across)] = 1;
+    }
+  }
+  std::size_t given_up = 0;
+  bool changed = false;
+  for (std::uint64_t cube : grown_list_) {
+    const std::int32_t hole = grown_.find(cube);
+    if (hole < 0 || !open[find_hole(hole)]) continue;
+    ++given_up;
+    const std::int32_t l = leaf_index_.find(cube);
+    if (l >= 0 && leaf_alive_[l]) {
+      live_triangles_ -= std::size_t(__builtin_popcount(leaf_mask_[l]));
+      leaf_alive_[l] = 0;
+      changed = true;
+    }
+  }
+  if (changed) find_open_edges();
+  return given_up;
+}
+
+void WeldedSurface::finish(TriangleMesh* mesh, std::vector<std::array<std::int32_t, 2>>* boundary,
+                           std::vector<std::int32_t>* new_vertices) {
+  std::vector<std::int32_t> order(leaf_cube_.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) { return leaf_cube_[a] < leaf_cube_[b]; });
+  mesh->triangles.clear();
+  mesh->triangles.reserve(live_triangles_);
+  for (std::int32_t l : order)
+    if (leaf_alive_[l])
+      for_each_triangle(l, [&](int, const std::array<std::int32_t, 3>& v, const std::array<int, 3>&) {
+        mesh->triangles.push_back({v[0], v[1], v[2]});
+      });
+  boundary->clear();
+  for (const OpenEdge& e : open_) boundary->push_back({e.a, e.b});
+  std::sort(boundary->begin(), boundary->end());
+  new_vertices->resize(positions_.size() - welded_vertices_);
+  std::iota(new_vertices->begin(), new_vertices->end(), std::int32_t(welded_vertices_));
+  mesh->positions = std::move(positions_);
+  mesh->colors = std::move(colors_);
+}
+
+}  // namespace scan2lod
