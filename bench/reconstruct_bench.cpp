@@ -1071,7 +1071,7 @@ int main(int argc, char** argv) {
           const TimedModel t = build_model_timed(points, R);
           return Values{t.reconstruct_seconds + t.model_seconds(), t.reconstruct_seconds, t.octree_seconds,
                         t.numbering_seconds, double(t.model.octree->tree.size()), double(t.model.octree->lod.full()),
-                        double(t.reconstruction.mesh.triangles.size()), t.cluster_seconds};
+                        double(t.full_triangles), t.cluster_seconds};
         },
         s.runs, s.repeat_under, s.timeout,
         [](int run, const Outcome& o) {

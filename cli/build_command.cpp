@@ -1,23 +1,19 @@
 // scan2lod build: inputs -> reconstruction -> LOD structures -> .mco model,
 // in one run: the prioritized marching-cube octree (Lee 2007) and the cluster
 // hierarchy (Cignoni et al. 2005), or either alone.
-#include "acquisition/load_inputs.h"
+#include "cli/byte_size.h"
 #include "cli/commands.h"
 #include "cli/outputs.h"
 #include "cli/reconstruct_flags.h"
 #include "cli/terminal.h"
-#include "io/mesh_file.h"
-#include "lod/lod_array.h"
-#include "lod/octree_order.h"
-#include "lod/mc_octree.h"
 #include "lod/model_file.h"
-
-#include "core/progress.h"
+#include "pipeline/build_model.h"
 
 #include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 
@@ -31,6 +27,8 @@ void add_build_command(CLI::App& app) {
     bool verbose = false, json = false;
     LodMetric metric = LodMetric::kDeviation;
     std::string structure = "both";
+    std::string memory, work_dir;
+    int brick_cubes = 0;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
@@ -54,62 +52,49 @@ void add_build_command(CLI::App& app) {
       ->default_str("both");
   cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each reconstruction stage");
   cmd->add_flag("--json", args->json, "Print the counts and stage times as JSON");
+  cmd->add_option("--memory", args->memory,
+                  "Memory the build may take, e.g. 400M or 4G (default: what the machine has available, less a "
+                  "tenth). A reconstruction whose estimate exceeds it runs brick by brick")
+      ->check([](const std::string& text) { return parse_bytes(text) > 0 ? "" : "expected a size such as 400M or 4G"; });
+  cmd->add_option("--work-dir", args->work_dir,
+                  "Folder for the bricks of a build in bricks; a build run again with the same folder resumes "
+                  "from its finished bricks (default: OUTPUT.work beside the output)");
+  cmd->add_option("--brick-cubes", args->brick_cubes,
+                  "Cubes per brick side, a power of two; with it the build always runs in bricks (default: from --memory)");
   cmd->callback([args] {
     using clock = std::chrono::steady_clock;
     auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
     const auto start = clock::now();
-    const ReconstructOptions& options = args->flags.resolve();
     check_model_output(args->output);
     refuse_overwriting_inputs(args->output, args->inputs);
-    const AcquisitionOptions& acquisition = args->flags.acquisition;
-    const bool want_octree = args->structure != "clusters", want_clusters = args->structure != "octree";
-    // A single mesh input keeps its own triangles for the cluster hierarchy.
-    AcquisitionReport report;
-    const OrientedPoints points = load_oriented_points(args->inputs, acquisition, &report);
-    refuse_overwriting_inputs(args->output, report.files);
-    const bool mesh_input = report.meshes == 1 && report.files.size() == 1;
-    const double read_seconds = since(start);
+    BuildOptions options;
+    options.reconstruct = args->flags.resolve();
+    options.acquisition = args->flags.acquisition;
+    options.octree = args->structure != "clusters";
+    options.clusters = args->structure != "octree";
+    options.metric = args->metric;
+    options.memory_bytes = args->memory.empty() ? 0 : parse_bytes(args->memory);
+    options.work_dir = args->work_dir.empty() ? args->output + ".work" : args->work_dir;
+    options.brick_cubes = args->brick_cubes;
+    if (args->brick_cubes > 0) options.strategy = BuildStrategy::kBricks;
+    BuildReport report;
+    LodModel model = build_model(args->inputs, options, &report);
+    for (const std::string& warning : report.warnings) warn(warning);
+    refuse_overwriting_inputs(args->output, report.acquisition.files);
 
     auto stage = clock::now();
-    Reconstruction r;
-    if (want_octree || !mesh_input) {
-      r = reconstruct(points, options);
-      require_surface(args->inputs, r, options.resolution);
-    }
-    const double reconstruct_seconds = since(stage);
-
-    stage = clock::now();
-    LodModel model;
-    if (want_octree) {
-      OctreeOptions octree;
-      octree.metric = args->metric;
-      McOctree tree = build_mc_octree(r, octree);
-      LodArray lod = number_nodes(tree);
-      model = model_from_octree(std::move(tree), std::move(lod));
-    }
-    const double octree_seconds = since(stage);
-
-    stage = clock::now();
-    if (want_clusters) {
-      Progress bar("clusters", 1000);
-      ClusterOptions clusters;
-      clusters.threads = options.threads;
-      clusters.progress = [&bar, done = std::size_t(0)](double share) mutable {
-        const std::size_t now = std::size_t(share * 1000);
-        if (now > done) bar.advance(now - done), done = now;
-      };
-      if (mesh_input) add_cluster_hierarchy(&model, read_mesh(args->inputs[0]), false, clusters);
-      else add_cluster_hierarchy(&model, r.mesh, want_octree, clusters);
-      bar.finish();
-    }
-    const double cluster_seconds = since(stage);
-
-    stage = clock::now();
     save_model(args->output, model);
     const double write_seconds = since(stage);
-
+    // A finished build needs its bricks no more.
+    if (report.in_bricks && args->work_dir.empty()) {
+      std::error_code ec;
+      std::filesystem::remove_all(options.work_dir, ec);
+    }
+    const std::size_t points = report.points;
+    const double read_seconds = report.seconds_read, reconstruct_seconds = report.seconds_reconstruct,
+                 octree_seconds = report.seconds_octree, cluster_seconds = report.seconds_clusters;
     if (args->json) {
-      nlohmann::ordered_json j = {{"points", points.size()}, {"vertices", model.vertices.size()}};
+      nlohmann::ordered_json j = {{"points", points}, {"vertices", model.vertices.size()}};
       if (model.has(LodStructure::kOctree)) {
         const OctreeSummary o = describe_octree(model);
         j["octree"] = {{"nodes", o.nodes}, {"expansions", o.expansions}, {"full_triangles", o.full_triangles}};
@@ -119,6 +104,11 @@ void add_build_command(CLI::App& app) {
         j["clusters"] = {{"clusters", c.clusters}, {"levels", c.levels}, {"full_triangles", c.full_triangles},
                          {"coarsest_triangles", c.coarsest_triangles}};
       }
+      if (report.in_bricks)
+        j["bricks"] = {{"brick_cubes", report.plan.brick_cubes}, {"bricks", report.bricks.bricks},
+                       {"runs", report.bricks.brick_runs}, {"resumed", report.bricks.bricks_resumed},
+                       {"follow_passes", report.bricks.follow_passes}, {"halo", report.plan.halo},
+                       {"widest_halo", report.bricks.widest_halo}};
       j["output"] = args->output;
       j["seconds"] = {{"total", since(start)}, {"read", read_seconds}, {"reconstruct", reconstruct_seconds},
                       {"octree", octree_seconds}, {"clusters", cluster_seconds}, {"write", write_seconds}};
@@ -126,12 +116,16 @@ void add_build_command(CLI::App& app) {
       return;
     }
     if (args->verbose) {
-      const ReconstructStats& s = r.stats;
+      const ReconstructStats& s = report.reconstruct;
       say("reconstruct: kd-tree %.3f s, signed distances %.3f s, marching cubes %.3f s, "
                   "pieces and holes %.3f s, attributes %.3f s\n",
                   s.seconds_index, s.seconds_distances, s.seconds_emit, s.seconds_cleanup, s.seconds_attributes);
+      if (report.in_bricks)
+        say("bricks of %d cubes (halo %.3g): %zu bricks, %zu runs, %zu resumed, %zu passes\n", report.plan.brick_cubes,
+            report.plan.halo, report.bricks.bricks, report.bricks.brick_runs, report.bricks.bricks_resumed,
+            report.bricks.follow_passes);
     }
-    say("%zu points, %zu vertices", points.size(), model.vertices.size());
+    say("%zu points, %zu vertices", points, model.vertices.size());
     if (model.has(LodStructure::kOctree)) {
       const OctreeSummary o = describe_octree(model);
       say(", octree: %zu nodes, %zu expansions, %lld triangles at 100%%", o.nodes, o.expansions,

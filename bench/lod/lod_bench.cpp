@@ -1295,7 +1295,7 @@ int main(int argc, char** argv) {
       const TimedModel t = build_model_timed(points, s.resolution);
       if (run == 0) save_model(model_path, t.model);
       return Values{t.reconstruct_seconds, t.octree_seconds, t.numbering_seconds,
-                    double(t.reconstruction.mesh.triangles.size()), t.cluster_seconds, 0, 0, 0};
+                    double(t.full_triangles), t.cluster_seconds, 0, 0, 0};
     }, s.timeout);
     std::fprintf(stderr, "  %s, peak %.0f MiB\n",
                  o.status == Outcome::ok

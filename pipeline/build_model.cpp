@@ -1,0 +1,136 @@
+#include "pipeline/build_model.h"
+
+#include "core/error.h"
+#include "core/progress.h"
+#include "io/mesh_file.h"
+#include "lod/lod_array.h"
+#include "lod/mc_octree.h"
+#include "lod/octree_order.h"
+#include "reconstruct/resolution_guard.h"
+
+#include <chrono>
+#include <cmath>
+
+namespace scan2lod {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string megabytes(double bytes) { return std::to_string(std::llround(bytes / (1 << 20))) + " MiB"; }
+
+// Phase 2: the strategy, from the in-core estimate against the budget.
+bool choose_bricks(const OrientedPoints& points, const BuildOptions& options, double budget, BuildReport* report) {
+  report->estimated_bytes = estimate_reconstruction(points, options.reconstruct.resolution, options.reconstruct.threads).bytes;
+  switch (options.strategy) {
+    case BuildStrategy::kInCore: return false;
+    case BuildStrategy::kBricks: return true;
+    case BuildStrategy::kAutomatic: break;
+  }
+  return report->estimated_bytes > budget;
+}
+
+Reconstruction reconstruct_for_build(const OrientedPoints& points, const BuildOptions& options, double budget,
+                                     BuildReport* report) {
+  report->in_bricks = choose_bricks(points, options, budget, report);
+  if (!report->in_bricks) {
+    ReconstructOptions in_core = options.reconstruct;
+    if (in_core.memory_limit <= 0 && options.memory_bytes > 0) in_core.memory_limit = options.memory_bytes;
+    return reconstruct(points, in_core);
+  }
+  if (options.octree)
+    throw InputError("", "the reconstruction needs about " + megabytes(report->estimated_bytes) +
+                             " in core and the budget is " + megabytes(budget) +
+                             ": in bricks only the cluster hierarchy can be built (--structure clusters), since "
+                             "the octree needs every leaf cube at once");
+  if (options.work_dir.empty()) throw InputError("", "a build in bricks needs a work folder");
+  BrickOptions bricks;
+  bricks.work_dir = options.work_dir;
+  bricks.memory_bytes = budget;
+  bricks.brick_cubes = options.brick_cubes;
+  report->plan = plan_bricks(points, options.reconstruct, bricks);
+  return reconstruct_in_bricks(points, options.reconstruct, bricks, &report->bricks);
+}
+
+LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,
+                           BuildReport* report_out, const std::string& source) {
+  if (!options.octree && !options.clusters) throw InputError("", "no LOD structure asked for");
+  BuildReport local;
+  BuildReport& report = report_out ? *report_out : local;
+  report.points = points.size();
+  report.mesh_input = mesh != nullptr;
+  const double budget = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
+
+  auto stage = Clock::now();
+  Reconstruction r;
+  if (options.octree || !mesh) {
+    r = reconstruct_for_build(points, options, budget, &report);
+    report.reconstruct = r.stats;
+    report.warnings = r.warnings;
+    if (r.mesh.triangles.empty())
+      throw InputError(source, "no surface at resolution " + std::to_string(options.reconstruct.resolution) + ": " +
+                               std::to_string(r.stats.points) + " points, " + std::to_string(r.stats.cubes_touched) +
+                               " cubes near them, none crossed by the surface (too few or too sparse points for "
+                               "this resolution: try a coarser --resolution)");
+  }
+  report.seconds_reconstruct = seconds_since(stage);
+  report.full_triangles = mesh && !options.octree ? mesh->triangles.size() : r.mesh.triangles.size();
+
+  stage = Clock::now();
+  LodModel model;
+  if (options.octree) {
+    OctreeOptions octree;
+    octree.metric = options.metric;
+    McOctree tree = build_mc_octree(r, octree);
+    const auto numbering = Clock::now();
+    LodArray lod = number_nodes(tree);
+    model = model_from_octree(std::move(tree), std::move(lod));
+    report.seconds_numbering = seconds_since(numbering);
+  }
+  report.seconds_octree = seconds_since(stage);
+
+  stage = Clock::now();
+  if (options.clusters) {
+    Progress bar("clusters", 1000);
+    ClusterOptions clusters;
+    clusters.threads = options.reconstruct.threads;
+    clusters.progress = [&bar, done = std::size_t(0)](double share) mutable {
+      const std::size_t now = std::size_t(share * 1000);
+      if (now > done) bar.advance(now - done), done = now;
+    };
+    if (mesh) add_cluster_hierarchy(&model, *mesh, false, clusters);
+    else add_cluster_hierarchy(&model, r.mesh, options.octree, clusters);
+    bar.finish();
+  }
+  report.seconds_clusters = seconds_since(stage);
+  return model;
+}
+
+}  // namespace
+
+LodModel build_model(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,
+                     BuildReport* report) {
+  return build_from_points(points, mesh, options, report, "");
+}
+
+LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions& options, BuildReport* report_out) {
+  BuildReport local;
+  BuildReport& report = report_out ? *report_out : local;
+  const auto start = Clock::now();
+  const OrientedPoints points = load_oriented_points(inputs, options.acquisition, &report.acquisition);
+  report.mesh_input = report.acquisition.meshes == 1 && report.acquisition.files.size() == 1;
+  TriangleMesh mesh;
+  if (report.mesh_input && options.clusters) mesh = read_mesh(inputs[0]);
+  report.seconds_read = seconds_since(start);
+  const AcquisitionReport acquisition = report.acquisition;
+  const double read = report.seconds_read;
+  std::string names;
+  for (const std::string& input : inputs) names += (names.empty() ? "" : ", ") + input;
+  LodModel model =
+      build_from_points(points, report.mesh_input && options.clusters ? &mesh : nullptr, options, &report, names);
+  report.acquisition = acquisition;
+  report.seconds_read = read;
+  return model;
+}
+
+}  // namespace scan2lod

@@ -1,0 +1,64 @@
+// The one way a LOD model is built: inputs -> oriented points ->
+// reconstruction -> the LOD structures. The command line, the benches and
+// (later) the Python package call this; none spells the sequence out again.
+//
+// Two strategies stand behind it, chosen from the reconstruction's estimate
+// against the memory budget: in core (reconstruct()), or brick by brick
+// (reconstruct_in_bricks(), with a work folder to resume from).
+#pragma once
+
+#include "acquisition/load_inputs.h"
+#include "lod/lod_model.h"
+#include "reconstruct/brick_reconstruction.h"
+#include "reconstruct/marching_cubes.h"
+
+#include <string>
+#include <vector>
+
+namespace scan2lod {
+
+enum class BuildStrategy { kAutomatic, kInCore, kBricks };
+
+struct BuildOptions {
+  ReconstructOptions reconstruct;
+  AcquisitionOptions acquisition;
+  bool octree = true;    // the prioritized marching-cube octree (Lee 2007)
+  bool clusters = true;  // the cluster hierarchy (Cignoni et al. 2005)
+  LodMetric metric = LodMetric::kDeviation;
+  // Memory the build may take, in bytes; 0: what the machine has available,
+  // less a margin (available_memory_bytes()).
+  double memory_bytes = 0;
+  BuildStrategy strategy = BuildStrategy::kAutomatic;
+  std::string work_dir;  // where bricks are kept; required when the build runs in bricks
+  int brick_cubes = 0;   // cubes per brick side; 0: from the memory budget
+};
+
+struct BuildReport {
+  std::size_t points = 0;
+  bool mesh_input = false;        // one mesh given: its own triangles are the clusters' full detail
+  bool in_bricks = false;         // the strategy that ran
+  double estimated_bytes = 0;     // the in-core reconstruction's estimate
+  BrickPlan plan;                 // when in bricks
+  BrickStats bricks;              // when in bricks
+  ReconstructStats reconstruct;
+  AcquisitionReport acquisition;
+  std::vector<std::string> warnings;
+  std::size_t full_triangles = 0;  // the reconstruction's (or the mesh input's)
+  // Wall-clock seconds per stage; the octree's build is seconds_octree, of
+  // which seconds_numbering is the priority numbering.
+  double seconds_read = 0, seconds_reconstruct = 0, seconds_octree = 0, seconds_numbering = 0, seconds_clusters = 0;
+};
+
+// @param[in] inputs  what load_oriented_points() takes
+// Throws InputError for unreadable input, for no surface, for a budget that
+// no strategy fits (naming the minimum), and for the octree in bricks (it
+// needs the in-core reconstruction's leaf cubes).
+LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions& options,
+                     BuildReport* report = nullptr);
+
+// The same from points already loaded (benches, tests); `mesh`, when not
+// null, is the one mesh input whose triangles the clusters keep.
+LodModel build_model(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,
+                     BuildReport* report = nullptr);
+
+}  // namespace scan2lod
