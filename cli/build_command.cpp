@@ -1,7 +1,6 @@
 // scan2lod build: inputs -> reconstruction -> LOD structures -> .mco model,
 // in one run: the prioritized marching-cube octree (Lee 2007) and the cluster
 // hierarchy (Cignoni et al. 2005), or either alone.
-#include "cli/byte_size.h"
 #include "cli/commands.h"
 #include "cli/outputs.h"
 #include "cli/reconstruct_flags.h"
@@ -27,8 +26,6 @@ void add_build_command(CLI::App& app) {
     bool verbose = false, json = false;
     LodMetric metric = LodMetric::kDeviation;
     std::string structure = "both";
-    std::string memory, work_dir;
-    int brick_cubes = 0;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
@@ -52,31 +49,16 @@ void add_build_command(CLI::App& app) {
       ->default_str("both");
   cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each reconstruction stage");
   cmd->add_flag("--json", args->json, "Print the counts and stage times as JSON");
-  cmd->add_option("--memory", args->memory,
-                  "Memory the build may take, e.g. 400M or 4G (default: what the machine has available, less a "
-                  "tenth). A reconstruction whose estimate exceeds it runs brick by brick")
-      ->check([](const std::string& text) { return parse_bytes(text) > 0 ? "" : "expected a size such as 400M or 4G"; });
-  cmd->add_option("--work-dir", args->work_dir,
-                  "Folder for the bricks of a build in bricks; a build run again with the same folder resumes "
-                  "from its finished bricks (default: OUTPUT.work beside the output)");
-  cmd->add_option("--brick-cubes", args->brick_cubes,
-                  "Cubes per brick side, a power of two; with it the build always runs in bricks (default: from --memory)");
   cmd->callback([args] {
     using clock = std::chrono::steady_clock;
     auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
     const auto start = clock::now();
     check_model_output(args->output);
     refuse_overwriting_inputs(args->output, args->inputs);
-    BuildOptions options;
-    options.reconstruct = args->flags.resolve();
-    options.acquisition = args->flags.acquisition;
+    BuildOptions options = args->flags.build_options(args->output);
     options.octree = args->structure != "clusters";
     options.clusters = args->structure != "octree";
     options.metric = args->metric;
-    options.memory_bytes = args->memory.empty() ? 0 : parse_bytes(args->memory);
-    options.work_dir = args->work_dir.empty() ? args->output + ".work" : args->work_dir;
-    options.brick_cubes = args->brick_cubes;
-    if (args->brick_cubes > 0) options.strategy = BuildStrategy::kBricks;
     BuildReport report;
     LodModel model = build_model(args->inputs, options, &report);
     for (const std::string& warning : report.warnings) warn(warning);
@@ -86,7 +68,7 @@ void add_build_command(CLI::App& app) {
     save_model(args->output, model);
     const double write_seconds = since(stage);
     // A finished build needs its bricks no more.
-    if (report.in_bricks && args->work_dir.empty()) {
+    if (report.in_bricks && args->flags.work_dir.empty()) {
       std::error_code ec;
       std::filesystem::remove_all(options.work_dir, ec);
     }

@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 namespace scan2lod::cli {
@@ -35,7 +36,8 @@ void add_reconstruct_command(CLI::App& app) {
   cmd->callback([args] {
     using clock = std::chrono::steady_clock;
     const auto start = clock::now();
-    const ReconstructOptions& options = args->flags.resolve();
+    const BuildOptions build = args->flags.build_options(args->output);
+    const ReconstructOptions& options = build.reconstruct;
     check_mesh_output(args->output);
     refuse_overwriting_inputs(args->output, args->inputs);
     const AcquisitionOptions& acquisition = args->flags.acquisition;
@@ -43,13 +45,21 @@ void add_reconstruct_command(CLI::App& app) {
     OrientedPoints points = load_oriented_points(args->inputs, acquisition, &report);
     refuse_overwriting_inputs(args->output, report.files);
     const double read_seconds = std::chrono::duration<double>(clock::now() - start).count();
-    Reconstruction r = reconstruct(points, options);
+    BuildOptions only_mesh = build;
+    only_mesh.octree = only_mesh.clusters = false;
+    BuildReport report_bricks;
+    Reconstruction r = reconstruct_within_budget(points, only_mesh, &report_bricks);
     require_surface(args->inputs, r, options.resolution);
     const auto write_start = clock::now();
     MeshWriteOptions write;
     write.quantize = !args->no_quantize;
     write.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
     write_mesh(args->output, r.mesh, write);
+    // The bricks of a finished reconstruction are needed no more.
+    if (report_bricks.in_bricks && args->flags.work_dir.empty()) {
+      std::error_code ec;
+      std::filesystem::remove_all(build.work_dir, ec);
+    }
     const double write_seconds = std::chrono::duration<double>(clock::now() - write_start).count();
     const double seconds = std::chrono::duration<double>(clock::now() - start).count();
     if (args->json) {

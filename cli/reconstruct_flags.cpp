@@ -1,5 +1,6 @@
 #include "cli/reconstruct_flags.h"
 
+#include "cli/byte_size.h"
 #include "cli/terminal.h"
 #include "core/error.h"
 
@@ -11,6 +12,17 @@ const ReconstructOptions& ReconstructFlags::resolve() {
   options.distance.method = parse_distance_method(method);
   acquisition.threads = options.threads;
   return options;
+}
+
+BuildOptions ReconstructFlags::build_options(const std::string& output) {
+  BuildOptions b;
+  b.reconstruct = resolve();
+  b.acquisition = acquisition;
+  b.memory_bytes = memory.empty() ? 0 : parse_bytes(memory);
+  b.work_dir = work_dir.empty() ? output + ".work" : work_dir;
+  b.brick_cubes = brick_cubes;
+  if (brick_cubes > 0) b.strategy = BuildStrategy::kBricks;
+  return b;
 }
 
 void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {
@@ -36,6 +48,16 @@ void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {
       ->capture_default_str();
   cmd->add_flag("--unregistered", flags->acquisition.unregistered,
                 "Range-grid PLYs given without their .conf already share one frame: merge them as they are");
+  cmd->add_option("--memory", flags->memory,
+                  "Memory the work may take, e.g. 400M or 4G (default: what the machine has available, less a "
+                  "tenth). A reconstruction whose estimate exceeds it runs brick by brick, with the same surface")
+      ->check([](const std::string& text) { return parse_bytes(text) > 0 ? "" : "expected a size such as 400M or 4G"; });
+  cmd->add_option("--work-dir", flags->work_dir,
+                  "Folder for the bricks; run again with the same folder, a killed build resumes from its finished "
+                  "bricks (default: OUTPUT.work, removed when the output is written)");
+  cmd->add_option("--brick-cubes", flags->brick_cubes,
+                  "Cubes per brick side, a power of two of 16 or more; with it the work always runs in bricks "
+                  "(default: from --memory)");
   cmd->add_option("-j,--threads", o.threads, "Threads (0: all cores)")->capture_default_str();
 }
 

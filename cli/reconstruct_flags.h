@@ -3,6 +3,7 @@
 #pragma once
 
 #include "acquisition/load_inputs.h"
+#include "pipeline/build_model.h"
 #include "reconstruct/marching_cubes.h"
 
 #include <CLI/CLI.hpp>
@@ -17,13 +18,20 @@ struct ReconstructFlags {
   std::string method = "planes";  // --distance, parsed by resolve()
   AcquisitionOptions acquisition; // --unregistered; threads set by resolve()
 
+  std::string memory;    // --memory, e.g. 400M; empty: what the machine has available
+  std::string work_dir;  // --work-dir; empty: OUTPUT.work
+  int brick_cubes = 0;   // --brick-cubes; forces bricks
+
   // Sets options.distance.method from `method`; throws for an unknown name.
   const ReconstructOptions& resolve();
+  // The build options these flags give, for an output at `output` (the work
+  // folder's default lies beside it).
+  BuildOptions build_options(const std::string& output);
 };
 
 // Adds -r/--resolution, --margin, --distance, --neighbours, --max-distance,
-// --reach, --min-piece, --max-hole, --hole-rounds, --unregistered and
-// -j/--threads to `cmd`,
+// --reach, --min-piece, --max-hole, --hole-rounds, --unregistered,
+// --memory, --work-dir, --brick-cubes and -j/--threads to `cmd`,
 // with the options' defaults shown in --help. `flags` must outlive parsing.
 void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags);
 

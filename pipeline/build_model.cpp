@@ -30,8 +30,13 @@ bool choose_bricks(const OrientedPoints& points, const BuildOptions& options, do
   return report->estimated_bytes > budget;
 }
 
-Reconstruction reconstruct_for_build(const OrientedPoints& points, const BuildOptions& options, double budget,
-                                     BuildReport* report) {
+}  // namespace
+
+Reconstruction reconstruct_within_budget(const OrientedPoints& points, const BuildOptions& options,
+                                         BuildReport* report_out) {
+  BuildReport local;
+  BuildReport* report = report_out ? report_out : &local;
+  const double budget = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
   report->in_bricks = choose_bricks(points, options, budget, report);
   if (!report->in_bricks) {
     ReconstructOptions in_core = options.reconstruct;
@@ -52,6 +57,8 @@ Reconstruction reconstruct_for_build(const OrientedPoints& points, const BuildOp
   return reconstruct_in_bricks(points, options.reconstruct, bricks, &report->bricks);
 }
 
+namespace {
+
 LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,
                            BuildReport* report_out, const std::string& source) {
   if (!options.octree && !options.clusters) throw InputError("", "no LOD structure asked for");
@@ -59,12 +66,10 @@ LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mes
   BuildReport& report = report_out ? *report_out : local;
   report.points = points.size();
   report.mesh_input = mesh != nullptr;
-  const double budget = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
-
   auto stage = Clock::now();
   Reconstruction r;
   if (options.octree || !mesh) {
-    r = reconstruct_for_build(points, options, budget, &report);
+    r = reconstruct_within_budget(points, options, &report);
     report.reconstruct = r.stats;
     report.warnings = r.warnings;
     if (r.mesh.triangles.empty())

@@ -56,6 +56,13 @@ struct BuildReport {
 LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions& options,
                      BuildReport* report = nullptr);
 
+// The reconstruction build_model() makes: in core when its estimate fits
+// options.memory_bytes, else brick by brick in options.work_dir (then the
+// octree is refused, and `leaves` is empty). Fills the report's strategy,
+// estimate, plan and brick counts.
+Reconstruction reconstruct_within_budget(const OrientedPoints& points, const BuildOptions& options,
+                                         BuildReport* report = nullptr);
+
 // The same from points already loaded (benches, tests); `mesh`, when not
 // null, is the one mesh input whose triangles the clusters keep.
 LodModel build_model(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,

@@ -5,6 +5,7 @@
 #include "core/progress.h"
 #include "io/atomic_file.h"
 #include "reconstruct/brick_surface.h"
+#include "reconstruct/cube_table.h"
 #include "reconstruct/hole_filling.h"
 #include "reconstruct/resolution_guard.h"
 #include "reconstruct/signed_distance.h"
@@ -21,6 +22,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <unordered_map>
 #include <numeric>
 
 namespace scan2lod {
@@ -114,7 +116,10 @@ std::size_t largest_brick(const OrientedPoints& points, const CubeGrid& grid, in
 constexpr double kWeldBytesPerCube = 80.0;
 constexpr double kDiskBytesPerCube = 36.0;
 
-std::string megabytes(double bytes) { return std::to_string(std::llround(bytes / (1 << 20))) + " MiB"; }
+std::string megabytes(double bytes) {
+  if (bytes >= 10.0 * (1 << 30)) return std::to_string(std::llround(bytes / (1 << 30))) + " GiB";
+  return std::to_string(std::llround(bytes / (1 << 20))) + " MiB";
+}
 
 // ---- brick files -----------------------------------------------------------
 
@@ -153,6 +158,7 @@ void write_brick(const std::string& path, std::uint64_t key, const BrickFile& b)
     put(out, b.surface.colors);
     put(out, b.surface.leaf_cubes);
     put(out, b.surface.leaf_cases);
+    put(out, b.surface.triangles);
     put(out, b.surface.requests);
     put(out, b.surface.border_cubes);
     out.flush();
@@ -174,11 +180,17 @@ bool read_brick(const std::string& path, std::uint64_t key, BrickFile* b) {
   BrickSurface& s = b->surface;
   s.cubes_touched = counts[0], s.corners_evaluated = counts[1], s.following_rounds = counts[2];
   if (!get(in, &b->followed, size) || !get(in, &s.vertex_edges, size) || !get(in, &s.positions, size) ||
-      !get(in, &s.colors, size) || !get(in, &s.leaf_cubes, size) || !get(in, &s.leaf_cases, size) ||
+      !get(in, &s.colors, size) || !get(in, &s.leaf_cubes, size) || !get(in, &s.leaf_cases, size) || !get(in, &s.triangles, size) ||
       !get(in, &s.requests, size) || !get(in, &s.border_cubes, size))
     return false;
   if (s.positions.size() != s.vertex_edges.size() || s.leaf_cubes.size() != s.leaf_cases.size()) return false;
   if (!s.colors.empty() && s.colors.size() != s.positions.size()) return false;
+  std::size_t triangles = 0;
+  for (std::uint8_t c : s.leaf_cases) triangles += cube_cases()[c].triangle_count;
+  if (triangles != s.triangles.size()) return false;
+  for (const Triangle& t : s.triangles)
+    for (std::int32_t v : t)
+      if (v < 0 || std::size_t(v) >= s.positions.size()) return false;
   return in.peek() == std::ifstream::traits_type::eof();
 }
 
@@ -188,10 +200,19 @@ struct Bins {
   std::vector<std::uint32_t> bricks;  // bricks that hold points, ascending
   std::vector<std::size_t> first;     // their points run [first[i], first[i + 1]) in `points`
   std::vector<std::uint32_t> points;  // ascending within a brick
-  // Per brick of the grid (all n³): no point outside this many world units
-  // reaches into the brick, under the normal limits and the relaxed ones of
-  // hole closing.
-  std::vector<float> halo, relaxed_halo;
+  // No point outside this many world units reaches into a brick, under the
+  // normal limits and the relaxed ones of hole closing: the base, or more for
+  // the bricks that points of wide spacing reach (listed here).
+  float base = 0, relaxed_base = 0;
+  std::unordered_map<std::uint32_t, std::pair<float, float>> wide;
+  float far(std::uint32_t brick) const {
+    const auto it = wide.find(brick);
+    return it == wide.end() ? base : it->second.first;
+  }
+  float relaxed_far(std::uint32_t brick) const {
+    const auto it = wide.find(brick);
+    return it == wide.end() ? relaxed_base : it->second.second;
+  }
 };
 
 // Phase 1: points by the brick they lie in, and each brick's halo: the base,
@@ -204,8 +225,8 @@ Bins bin_points(const OrientedPoints& points, const BrickPlan& plan, const Recon
   relaxed.distance.max_distance *= 2.f;
   const double factor = influence_factor(options), relaxed_factor = influence_factor(relaxed);
   Bins bins;
-  bins.halo.assign(std::size_t(n) * n * n, float(plan.halo));
-  bins.relaxed_halo.assign(std::size_t(n) * n * n, float(relaxed_factor * h + extra));
+  bins.base = float(plan.halo);
+  bins.relaxed_base = float(relaxed_factor * h + extra);
   std::vector<std::uint64_t> pairs(points.size());
   const bool spaced = points.spacing.size() == points.size();
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -219,9 +240,9 @@ Bins bin_points(const OrientedPoints& points, const BrickPlan& plan, const Recon
     for (int z = lo / (n * n); z <= hi / (n * n); ++z)
       for (int y = lo / n % n; y <= hi / n % n; ++y)
         for (int x = lo % n; x <= hi % n; ++x) {
-          const std::size_t b = (std::size_t(z) * n + y) * n + x;
-          bins.halo[b] = std::max(bins.halo[b], normal);
-          bins.relaxed_halo[b] = std::max(bins.relaxed_halo[b], float(reach));
+          const auto [it, fresh] = bins.wide.try_emplace(std::uint32_t((z * n + y) * n + x), bins.base, bins.relaxed_base);
+          it->second.first = std::max(it->second.first, normal);
+          it->second.second = std::max(it->second.second, float(reach));
         }
   }
   std::sort(pairs.begin(), pairs.end());
@@ -322,7 +343,7 @@ std::size_t with_brick_points(const OrientedPoints& all, const Bins& bins, const
     const OrientedPoints sub = gather(all, bins, plan, brick, halo);
     *widest = std::max(*widest, halo);
     if (sub.size() == 0 && halo < far) {
-      halo = far;
+      halo = std::min(far, 2 * halo);
       continue;
     }
     const double needed = work(sub);
@@ -357,7 +378,9 @@ BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& op
     if (B & (B - 1) || B < 16) throw InputError("", "brick size " + std::to_string(B) + ": expected a power of two >= 16");
     B = std::min(B, R);
   } else {
-    for (B = R; B > smallest && brick_bytes(B) > budget; B /= 2) {}
+    // Brick ids are 32 bits: no more than 2^32 bricks.
+    auto countable = [&](int b) { const double n = std::ceil(double(R) / b); return n * n * n < 4294967295.0; };
+    for (B = R; B > smallest && countable(B / 2) && brick_bytes(B) > budget; B /= 2) {}
     if (brick_bytes(B) > budget)
       throw InputError("", "--memory " + megabytes(budget) + " is below what one brick needs at resolution " +
                                std::to_string(R) + ": at least " + megabytes(brick_bytes(B)) + " (bricks of " +
@@ -366,6 +389,10 @@ BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& op
   }
   plan.brick_cubes = B;
   plan.bricks_per_axis = (R + B - 1) / B;
+  if (double(plan.bricks_per_axis) * plan.bricks_per_axis * plan.bricks_per_axis >= 4294967295.0)
+    throw InputError("", "resolution " + std::to_string(R) + " would need about " + megabytes(whole.bytes) +
+                             " in core, and more than 2^32 bricks of " + std::to_string(B) +
+                             " cubes: choose a coarser --resolution");
   plan.brick_bytes = brick_bytes(B);
   plan.weld_bytes = kWeldBytesPerCube * whole.cubes + 40.0 * double(points.size());
   plan.disk_bytes = kDiskBytesPerCube * whole.cubes * (1.0 + 0.1 * double(plan.bricks_per_axis));
@@ -392,22 +419,25 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
   const std::string advice = coarse_input_advice(points, options.resolution);
   if (!advice.empty()) result.warnings.push_back(advice);
 
-  // The work folder, with room for the bricks.
-  const std::string dir = (fs::path(brick_options.work_dir) / "bricks").string();
+  // Room for the bricks, checked before the work folder is made.
   std::error_code ec;
+  fs::path existing = fs::absolute(brick_options.work_dir, ec);
+  while (!existing.empty() && !fs::exists(existing, ec) && existing != existing.root_path()) existing = existing.parent_path();
+  const fs::space_info space = fs::space(existing, ec);
+  if (!ec && double(space.available) < plan.disk_bytes)
+    throw InputError(brick_options.work_dir, "resolution " + std::to_string(options.resolution) +
+                                                 " would need about " + megabytes(plan.disk_bytes) +
+                                                 " of disk for its bricks and " + megabytes(double(space.available)) +
+                                                 " are free there");
+  const std::string dir = (fs::path(brick_options.work_dir) / "bricks").string();
   fs::create_directories(dir, ec);
   if (ec) throw InputError(brick_options.work_dir, "cannot make the work folder: " + ec.message());
   // What a killed build was writing: never a finished brick (those are renamed into place).
   for (const auto& entry : fs::directory_iterator(dir, ec))
     if (entry.path().filename().string().rfind(".tmp-", 0) == 0) fs::remove(entry.path(), ec);
-  const fs::space_info space = fs::space(dir, ec);
-  if (!ec && double(space.available) < plan.disk_bytes)
-    throw InputError(brick_options.work_dir, "the bricks need about " + megabytes(plan.disk_bytes) + " of disk and " +
-                                                 megabytes(double(space.available)) + " are free there");
 
   const Bins bins = bin_points(points, plan, options);
-  const double relaxed_halo = bins.relaxed_halo.empty() ? plan.halo : double(*std::min_element(
-                                                                          bins.relaxed_halo.begin(), bins.relaxed_halo.end()));
+
   stats.seconds_index = lap();
 
   // Phases 2 and 3: bricks run, and run again with the cubes their neighbours'
@@ -421,7 +451,14 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
   std::map<std::uint32_t, State> bricks;
   for (std::uint32_t b : bins.bricks) bricks[b].pending = true;
   if (options.margin > 0)
-    for (std::uint32_t b = 0; b < bins.halo.size(); ++b) bricks[b].pending = true;
+    for (std::uint32_t b : bins.bricks) {
+      const int n = plan.bricks_per_axis, r = (options.margin + plan.brick_cubes - 1) / plan.brick_cubes;
+      const int x = int(b) % n, y = int(b) / n % n, z = int(b) / (n * n);
+      for (int dz = std::max(0, z - r); dz <= std::min(n - 1, z + r); ++dz)
+        for (int dy = std::max(0, y - r); dy <= std::min(n - 1, y + r); ++dy)
+          for (int dx = std::max(0, x - r); dx <= std::min(n - 1, x + r); ++dx)
+            bricks[std::uint32_t((dz * n + dy) * n + dx)].pending = true;
+    }
   BrickStats bs;
   const double cubes_per_point = estimate_reconstruction(points, options.resolution).cubes / double(points.size());
   Progress progress("bricks", bricks.size());
@@ -442,10 +479,10 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
         // The base halo first; where a value needs more (points of wide
         // spacing nearby), again with what it needs.
         file.followed = state.wanted;
-        bs.brick_runs += with_brick_points(points, bins, plan, brick, plan.halo, bins.halo[brick],
+        bs.brick_runs += with_brick_points(points, bins, plan, brick, plan.halo, bins.far(brick),
                                            [&](const OrientedPoints& sub) {
           file.surface = reconstruct_brick(sub, plan.grid, region_of(plan, brick), file.followed,
-                                           cubes_per_point * double(sub.size()), bins.halo[brick], options);
+                                           cubes_per_point * double(sub.size()), bins.far(brick), options);
           return double(file.surface.needed_halo);
         }, &bs.widest_halo);
         write_brick(path, plan.key, file);
@@ -482,7 +519,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
       throw InputError(brick_path(dir, brick), "a finished brick changed or vanished during the build");
     const BrickSurface& s = file.surface;
     surface.add_vertices(s.vertex_edges, s.positions, s.colors);
-    surface.add_leaves(s.leaf_cubes, s.leaf_cases);
+    surface.add_leaves(s.leaf_cubes, s.leaf_cases, s.triangles);
     stats.cubes_touched += s.cubes_touched;
     stats.corners_evaluated += s.corners_evaluated;
     stats.following_rounds = std::max(stats.following_rounds, s.following_rounds);
@@ -496,6 +533,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
   ReconstructOptions relaxed = options;
   relaxed.distance.max_distance *= 2.f;
   const float h = float(plan.grid.cube_size);
+  const double relaxed_halo = base_halo(relaxed, plan.grid.cube_size);
   auto evaluate = [&](const std::vector<std::uint64_t>& corners, std::vector<float>* values) {
     values->assign(corners.size(), std::numeric_limits<float>::quiet_NaN());
     std::map<std::uint32_t, std::vector<std::size_t>> by_brick;
@@ -507,7 +545,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
         unpack_key(corners[i], &x, &y, &z);
         queries.push_back(plan.grid.corner_position(x, y, z));
       }
-      with_brick_points(points, bins, plan, brick, relaxed_halo, bins.relaxed_halo[brick],
+      with_brick_points(points, bins, plan, brick, relaxed_halo, bins.relaxed_far(brick),
                         [&](const OrientedPoints& sub) {
         if (sub.size() == 0) return 0.0;
         const PointIndex index(sub);
@@ -517,7 +555,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
         double widest = 0;
         for (std::size_t j = 0; j < members.size(); ++j) {
           (*values)[members[j]] = d[j];
-          widest = std::max(widest, double(std::isnan(d[j]) ? std::min(needed[j], bins.relaxed_halo[brick]) : needed[j]));
+          widest = std::max(widest, double(std::isnan(d[j]) ? std::min(needed[j], bins.relaxed_far(brick)) : needed[j]));
         }
         return widest;
       }, &bs.widest_halo);
@@ -528,10 +566,10 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
   if (options.max_hole > 0.0) {
     for (int round = 0; round < options.hole_rounds; ++round) {
       const std::size_t grown = surface.grow_into_small_holes(max_edges, evaluate);
-      stats.cubes_hole_closing += grown;
       if (grown == 0) break;
     }
     surface.give_up_open_growth();
+    stats.cubes_hole_closing = surface.grown_cubes();
     stats.triangles_dropped += surface.drop_small_pieces(options.min_piece);
   }
   TriangleMesh& mesh = result.mesh;
@@ -552,7 +590,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
     for (const auto& [brick, members] : by_brick) {
       std::vector<Vec3f> at;
       for (std::int32_t v : members) at.push_back(mesh.positions[v]);
-      with_brick_points(points, bins, plan, brick, plan.halo, bins.halo[brick], [&](const OrientedPoints& sub) {
+      with_brick_points(points, bins, plan, brick, plan.halo, bins.far(brick), [&](const OrientedPoints& sub) {
         if (sub.size() == 0) return 0.0;
         const PointIndex index(sub);
         std::vector<float> needed;

@@ -25,10 +25,10 @@ struct BrickSurface {
   std::vector<std::uint64_t> vertex_edges;   // lattice edge of each vertex: lower corner key << 2 | axis
   std::vector<Vec3f> positions;
   std::vector<Rgb> colors;                   // empty without colour input
-  // The emitting cubes (keys) and their cases: a cube's triangles follow from
-  // its case (cube_table.h) and its vertices from its edges.
+  // The emitting cubes (keys) and their cases (cube_table.h).
   std::vector<std::uint64_t> leaf_cubes;
   std::vector<std::uint8_t> leaf_cases;
+  std::vector<Triangle> triangles;  // each leaf's case triangles in turn, into the vertices above
   // Cubes outside the region that the surface leads into (sorted): the
   // owning brick must follow from them too.
   std::vector<std::uint64_t> requests;

@@ -113,6 +113,14 @@ std::vector<Triangle> fill_small_holes(const TriangleMesh& mesh,
       v = next[v];
     }
     if (v != std::int32_t(start) || !usable || loop.size() < 3 || loop.size() > max_edges) continue;
+    // Starting at the least position, a loop is cut the same way whatever
+    // order its edges came in and however its vertices are numbered (a flat
+    // loop has many triangulations of equal area; bricks must pick in-core's).
+    const auto least = std::min_element(loop.begin(), loop.end(), [&](std::int32_t a, std::int32_t b) {
+      const Vec3f &p = mesh.positions[a], &q = mesh.positions[b];
+      return std::lexicographical_compare(p.data(), p.data() + 3, q.data(), q.data() + 3);
+    });
+    std::rotate(loop.begin(), least, loop.end());
     loops.push_back(std::move(loop));
   }
   if (loops.empty()) return {};

@@ -213,7 +213,10 @@ class SurfaceBuilder {
       std::uint8_t mask;
       if (grown_[id] || (usable_[id] && cube_case(std::size_t(id), &mask))) continue;
       grow.push_back(id);
-      hole_of_[id] = loop_hole[root];
+      // A cube across the edges of two holes joins them: one outcome, whatever
+      // order the edges came in (bricks weld theirs in another).
+      if (hole_of_[id] >= 0) unite_holes(loop_hole[root], hole_of_[id]);
+      else hole_of_[id] = loop_hole[root];
     }
     std::sort(grow.begin(), grow.end());
     grow.erase(std::unique(grow.begin(), grow.end()), grow.end());
@@ -317,11 +320,12 @@ class SurfaceBuilder {
       }
     }
     out->positions = std::move(positions_);
+    // Nothing is dropped in a brick: every leaf keeps all its case triangles, in slot order.
     for (std::size_t l = 0; l < leaf_count(); ++l) {
-      if (!leaf_alive_[l]) continue;
       out->leaf_cubes.push_back(cube_keys_[leaf_cube_[l]]);
       out->leaf_cases.push_back(leaf_case_[l]);
     }
+    out->triangles = std::move(triangles_);
     std::sort(requests_.begin(), requests_.end());
     requests_.erase(std::unique(requests_.begin(), requests_.end()), requests_.end());
     out->requests = std::move(requests_);
@@ -977,10 +981,11 @@ BrickSurface reconstruct_brick(const OrientedPoints& points, const CubeGrid& gri
   std::vector<std::int32_t> all(builder.cube_count());
   std::iota(all.begin(), all.end(), 0);
   builder.emit(all);
-  out.cubes_touched = builder.usable_cubes();
-  out.corners_evaluated = builder.corner_count();
-  out.needed_halo = builder.needed_radius();
+  const std::size_t touched = builder.usable_cubes(), corners = builder.corner_count();
   builder.take_brick_surface(&out);
+  out.cubes_touched = touched;
+  out.corners_evaluated = corners;
+  out.needed_halo = builder.needed_radius();
   std::vector<float> needed;
   out.colors = vertex_colors(points, builder.index(), out.positions, float(grid.cube_size), threads, &needed);
   for (float r : needed) out.needed_halo = std::max(out.needed_halo, r);

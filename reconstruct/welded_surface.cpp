@@ -57,12 +57,24 @@ struct UnionFind {
 
 void WeldedSurface::add_vertices(const std::vector<std::uint64_t>& edges, const std::vector<Vec3f>& positions,
                                  const std::vector<Rgb>& colors) {
+  leaf_vertex_base_ = vertex_edge_.size();
   vertex_edge_.insert(vertex_edge_.end(), edges.begin(), edges.end());
   positions_.insert(positions_.end(), positions.begin(), positions.end());
   colors_.insert(colors_.end(), colors.begin(), colors.end());
 }
 
-void WeldedSurface::add_leaves(const std::vector<std::uint64_t>& cubes, const std::vector<std::uint8_t>& cases) {
+void WeldedSurface::add_leaves(const std::vector<std::uint64_t>& cubes, const std::vector<std::uint8_t>& cases,
+                                const std::vector<Triangle>& triangles) {
+  std::size_t at = 0;
+  for (std::size_t l = 0; l < cubes.size(); ++l) {
+    leaf_first_.push_back(std::uint32_t(triangles_.size()));
+    const int count = cube_cases()[cases[l]].triangle_count;
+    for (int t = 0; t < count; ++t, ++at) {
+      const Triangle& tri = triangles.at(at);
+      triangles_.push_back({tri[0] + std::int32_t(leaf_vertex_base_), tri[1] + std::int32_t(leaf_vertex_base_),
+                            tri[2] + std::int32_t(leaf_vertex_base_)});
+    }
+  }
   leaf_cube_.insert(leaf_cube_.end(), cubes.begin(), cubes.end());
   leaf_case_.insert(leaf_case_.end(), cases.begin(), cases.end());
 }
@@ -74,29 +86,45 @@ void WeldedSurface::weld() {
   std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
     return vertex_edge_[a] < vertex_edge_[b] || (vertex_edge_[a] == vertex_edge_[b] && a < b);
   });
+  std::vector<std::int32_t> rank(vertex_edge_.size());
   std::vector<std::uint64_t> edges;
   std::vector<Vec3f> positions;
   std::vector<Rgb> colors;
   const bool colored = colors_.size() == positions_.size() && !colors_.empty();
   for (std::size_t i = 0; i < order.size(); ++i) {
-    if (i > 0 && vertex_edge_[order[i]] == vertex_edge_[order[i - 1]]) continue;
-    edges.push_back(vertex_edge_[order[i]]);
-    positions.push_back(positions_[order[i]]);
-    if (colored) colors.push_back(colors_[order[i]]);
+    if (i == 0 || vertex_edge_[order[i]] != vertex_edge_[order[i - 1]]) {
+      edges.push_back(vertex_edge_[order[i]]);
+      positions.push_back(positions_[order[i]]);
+      if (colored) colors.push_back(colors_[order[i]]);
+    }
+    rank[order[i]] = std::int32_t(edges.size() - 1);
   }
+  std::vector<std::int32_t>().swap(order);
   vertex_edge_ = std::move(edges);
   positions_ = std::move(positions);
   colors_ = std::move(colors);
   welded_vertices_ = vertex_edge_.size();
+  for (Triangle& t : triangles_)
+    for (std::int32_t& v : t) v = rank[v];
   // Leaves: each cube is emitted by one brick only; sorted by cube.
   std::vector<std::int32_t> by_cube(leaf_cube_.size());
   std::iota(by_cube.begin(), by_cube.end(), 0);
   std::sort(by_cube.begin(), by_cube.end(), [&](std::int32_t a, std::int32_t b) { return leaf_cube_[a] < leaf_cube_[b]; });
   std::vector<std::uint64_t> cubes(by_cube.size());
   std::vector<std::uint8_t> cases(by_cube.size());
-  for (std::size_t i = 0; i < by_cube.size(); ++i) cubes[i] = leaf_cube_[by_cube[i]], cases[i] = leaf_case_[by_cube[i]];
+  std::vector<std::uint32_t> first(by_cube.size());
+  std::vector<Triangle> triangles;
+  triangles.reserve(triangles_.size());
+  for (std::size_t i = 0; i < by_cube.size(); ++i) {
+    const std::int32_t l = by_cube[i];
+    cubes[i] = leaf_cube_[l], cases[i] = leaf_case_[l], first[i] = std::uint32_t(triangles.size());
+    const int count = cube_cases()[leaf_case_[l]].triangle_count;
+    triangles.insert(triangles.end(), triangles_.begin() + leaf_first_[l], triangles_.begin() + leaf_first_[l] + count);
+  }
   leaf_cube_ = std::move(cubes);
   leaf_case_ = std::move(cases);
+  leaf_first_ = std::move(first);
+  triangles_ = std::move(triangles);
   leaf_mask_.resize(leaf_cube_.size());
   leaf_alive_.assign(leaf_cube_.size(), 1);
   leaf_index_ = FlatHashMap(leaf_cube_.size());
@@ -137,9 +165,8 @@ void WeldedSurface::for_each_triangle(std::int32_t leaf, Visit visit) const {
   const CubeCase& cc = cube_cases()[leaf_case_[leaf]];
   for (int t = 0; t < cc.triangle_count; ++t) {
     if (!(leaf_mask_[leaf] >> t & 1)) continue;
-    std::array<std::int32_t, 3> v;
-    std::array<int, 3> e;
-    for (int k = 0; k < 3; ++k) e[k] = cc.triangles[t][k], v[k] = vertex_of(edge_key_of(leaf_cube_[leaf], e[k]));
+    const Triangle& v = triangles_[leaf_first_[leaf] + std::uint32_t(t)];
+    const std::array<int, 3> e = {cc.triangles[t][0], cc.triangles[t][1], cc.triangles[t][2]};
     visit(t, v, e);
   }
 }
@@ -161,21 +188,39 @@ bool WeldedSurface::neighbour_key(std::uint64_t cube, int face, std::uint64_t* k
 
 // Open: a triangle edge on a cube face whose cube across emits nothing (two
 // cubes sharing a face join its crossings alike).
+void WeldedSurface::append_open_edges(std::int32_t l) {
+  const auto& faces = face_of();
+  for_each_triangle(l, [&](int, const Triangle& v, const std::array<int, 3>& e) {
+    for (int k = 0; k < 3; ++k) {
+      const int face = faces[e[k]][e[(k + 1) % 3]];
+      std::uint64_t n;
+      if (face < 0) continue;
+      if (neighbour_key(leaf_cube_[l], face, &n) && emitting(n)) continue;
+      open_.push_back({v[k], v[(k + 1) % 3], l, face});
+    }
+  });
+}
+
 void WeldedSurface::find_open_edges() {
   open_.clear();
-  const auto& faces = face_of();
-  for (std::size_t l = 0; l < leaf_cube_.size(); ++l) {
-    if (!leaf_alive_[l]) continue;
-    for_each_triangle(std::int32_t(l), [&](int, const std::array<std::int32_t, 3>& v, const std::array<int, 3>& e) {
-      for (int k = 0; k < 3; ++k) {
-        const int face = faces[e[k]][e[(k + 1) % 3]];
-        std::uint64_t n;
-        if (face < 0) continue;
-        if (neighbour_key(leaf_cube_[l], face, &n) && emitting(n)) continue;
-        open_.push_back({v[k], v[(k + 1) % 3], std::int32_t(l), face});
-      }
-    });
-  }
+  for (std::size_t l = 0; l < leaf_cube_.size(); ++l)
+    if (leaf_alive_[l]) append_open_edges(std::int32_t(l));
+}
+
+void WeldedSurface::refresh_open_edges(std::vector<std::int32_t> look, const std::vector<std::int32_t>& dead) {
+  for (const OpenEdge& e : open_) look.push_back(e.leaf);
+  for (std::int32_t l : dead)
+    for (int face = 0; face < 6; ++face) {
+      std::uint64_t n;
+      if (!neighbour_key(leaf_cube_[l], face, &n)) continue;
+      const std::int32_t m = leaf_index_.find(n);
+      if (m >= 0 && leaf_alive_[m]) look.push_back(m);
+    }
+  std::sort(look.begin(), look.end());
+  look.erase(std::unique(look.begin(), look.end()), look.end());
+  open_.clear();
+  for (std::int32_t l : look)
+    if (leaf_alive_[l]) append_open_edges(l);
 }
 
 std::size_t WeldedSurface::drop_small_pieces(double fraction) {
@@ -184,27 +229,30 @@ std::size_t WeldedSurface::drop_small_pieces(double fraction) {
   std::vector<std::int32_t> size(positions_.size(), 0);
   for (std::size_t l = 0; l < leaf_cube_.size(); ++l)
     if (leaf_alive_[l])
-      for_each_triangle(std::int32_t(l), [&](int, const std::array<std::int32_t, 3>& v, const std::array<int, 3>&) {
+      for_each_triangle(std::int32_t(l), [&](int, const Triangle& v, const std::array<int, 3>&) {
         uf.unite(v[0], v[1]), uf.unite(v[1], v[2]);
       });
   for (std::size_t l = 0; l < leaf_cube_.size(); ++l)
     if (leaf_alive_[l])
-      for_each_triangle(std::int32_t(l), [&](int, const std::array<std::int32_t, 3>& v, const std::array<int, 3>&) {
+      for_each_triangle(std::int32_t(l), [&](int, const Triangle& v, const std::array<int, 3>&) {
         ++size[uf.find(v[0])];
       });
   const double limit = fraction * double(live_triangles_);
   std::size_t dropped = 0;
+  std::vector<std::int32_t> touched, dead;
   for (std::size_t l = 0; l < leaf_cube_.size(); ++l) {
     if (!leaf_alive_[l]) continue;
     std::uint16_t mask = leaf_mask_[l];
-    for_each_triangle(std::int32_t(l), [&](int t, const std::array<std::int32_t, 3>& v, const std::array<int, 3>&) {
+    for_each_triangle(std::int32_t(l), [&](int t, const Triangle& v, const std::array<int, 3>&) {
       if (size[uf.find(v[0])] < limit) mask &= std::uint16_t(~(1u << t)), ++dropped;
     });
+    if (mask == leaf_mask_[l]) continue;
     leaf_mask_[l] = mask;
-    if (mask == 0) leaf_alive_[l] = 0;
+    touched.push_back(std::int32_t(l));
+    if (mask == 0) leaf_alive_[l] = 0, dead.push_back(std::int32_t(l));
   }
   live_triangles_ -= dropped;
-  if (dropped) find_open_edges();
+  if (dropped) refresh_open_edges(std::move(touched), dead);
   return dropped;
 }
 
@@ -243,7 +291,7 @@ std::size_t WeldedSurface::grow_into_small_holes(std::size_t max_edges, const Co
   // The cubes across small loops' open faces that never emitted (a cube
   // whose leaf a dropped piece took is not grown into: its corners are
   // defined and it stays out, as in core) and were not grown before.
-  // A cube across two holes' edges joins the hole named last, as in core.
+  // A cube across two holes' edges joins them, as in core.
   std::vector<std::uint64_t> grow;
   FlatHashMap hole_of(64);
   for (const OpenEdge& e : open_) {
@@ -253,7 +301,9 @@ std::size_t WeldedSurface::grow_into_small_holes(std::size_t max_edges, const Co
     if (!neighbour_key(leaf_cube_[e.leaf], e.face, &key)) continue;
     if (grown_.find(key) >= 0 || leaf_index_.find(key) >= 0) continue;  // grown before, or a leaf dead or alive
     grow.push_back(key);
-    hole_of.assign(key, loop_hole[root]);
+    const std::int32_t other = hole_of.find(key);
+    if (other >= 0) hole_parent_[find_hole(loop_hole[root])] = find_hole(other);
+    else hole_of.insert(key, loop_hole[root]);
   }
   std::sort(grow.begin(), grow.end());
   grow.erase(std::unique(grow.begin(), grow.end()), grow.end());
@@ -277,6 +327,7 @@ std::size_t WeldedSurface::grow_into_small_holes(std::size_t max_edges, const Co
   // Each grown cube with all corners defined and a sign change emits all its
   // case's triangles; new vertices sit at the corners' ratio, as in core.
   const auto& table = cube_cases();
+  std::vector<std::int32_t> fresh;
   for (std::uint64_t cube : grow) {
     grown_list_.push_back(cube);
     float d[8];
@@ -304,13 +355,19 @@ std::size_t WeldedSurface::grow_into_small_holes(std::size_t max_edges, const Co
     const std::int32_t leaf = std::int32_t(leaf_cube_.size());
     leaf_cube_.push_back(cube);
     leaf_case_.push_back(mask);
-    leaf_mask_.push_back(0);
+    leaf_first_.push_back(std::uint32_t(triangles_.size()));
+    for (int t = 0; t < cc.triangle_count; ++t) {
+      Triangle tri;
+      for (int k = 0; k < 3; ++k) tri[k] = vertex_of(edge_key_of(cube, cc.triangles[t][k]));
+      triangles_.push_back(tri);
+    }
+    leaf_mask_.push_back(full_mask(leaf));
     leaf_alive_.push_back(1);
-    leaf_mask_.back() = full_mask(leaf);
     leaf_index_.insert(cube, leaf);
     live_triangles_ += cc.triangle_count;
+    fresh.push_back(leaf);
   }
-  find_open_edges();
+  refresh_open_edges(std::move(fresh), {});
   return grow.size();
 }
 
@@ -326,20 +383,27 @@ std::size_t WeldedSurface::give_up_open_growth() {
     }
   }
   std::size_t given_up = 0;
-  bool changed = false;
+  std::vector<std::int32_t> dead;
   for (std::uint64_t cube : grown_list_) {
     const std::int32_t hole = grown_.find(cube);
     if (hole < 0 || !open[find_hole(hole)]) continue;
     ++given_up;
+    grown_.assign(cube, -2);  // given up: no longer grown, never grown again
     const std::int32_t l = leaf_index_.find(cube);
     if (l >= 0 && leaf_alive_[l]) {
       live_triangles_ -= std::size_t(__builtin_popcount(leaf_mask_[l]));
       leaf_alive_[l] = 0;
-      changed = true;
+      dead.push_back(l);
     }
   }
-  if (changed) find_open_edges();
+  if (!dead.empty()) refresh_open_edges({}, dead);
   return given_up;
+}
+
+std::size_t WeldedSurface::grown_cubes() const {
+  std::size_t kept = 0;
+  for (std::uint64_t cube : grown_list_) kept += grown_.find(cube) >= 0;
+  return kept;
 }
 
 void WeldedSurface::finish(TriangleMesh* mesh, std::vector<std::array<std::int32_t, 2>>* boundary,
@@ -351,7 +415,7 @@ void WeldedSurface::finish(TriangleMesh* mesh, std::vector<std::array<std::int32
   mesh->triangles.reserve(live_triangles_);
   for (std::int32_t l : order)
     if (leaf_alive_[l])
-      for_each_triangle(l, [&](int, const std::array<std::int32_t, 3>& v, const std::array<int, 3>&) {
+      for_each_triangle(l, [&](int, const Triangle& v, const std::array<int, 3>&) {
         mesh->triangles.push_back({v[0], v[1], v[2]});
       });
   boundary->clear();

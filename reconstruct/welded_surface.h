@@ -5,9 +5,9 @@
 // holds the points near them), growth given up where a hole stays open, and
 // rim triangles over what marching cubes could not close.
 //
-// The surface is held as its leaves (emitting cube, case, kept case triangles)
-// over vertices keyed by lattice edge, about 60 bytes a leaf: a cube's
-// triangles follow from its case, and its vertices from its edges.
+// The surface is held as its leaves (emitting cube, case, kept case
+// triangles) with their triangles, over vertices keyed by lattice edge: about
+// 90 bytes a leaf.
 #pragma once
 
 #include "core/flat_hash.h"
@@ -33,11 +33,15 @@ class WeldedSurface {
   // both; they are one vertex after weld().
   void add_vertices(const std::vector<std::uint64_t>& edges, const std::vector<Vec3f>& positions,
                     const std::vector<Rgb>& colors);
-  void add_leaves(const std::vector<std::uint64_t>& cubes, const std::vector<std::uint8_t>& cases);
+  // `triangles`: each leaf's case triangles in order, indexing this brick's
+  // vertices (the last add_vertices()).
+  void add_leaves(const std::vector<std::uint64_t>& cubes, const std::vector<std::uint8_t>& cases,
+                  const std::vector<Triangle>& triangles);
   void weld();
 
   std::size_t live_triangles() const { return live_triangles_; }
   std::size_t leaves() const { return leaf_cube_.size(); }
+  std::size_t grown_cubes() const;  // grown into holes and kept
 
   // Phase 2: as SurfaceBuilder does (marching_cubes.cpp). Returns triangles
   // dropped, cubes grown, cubes given up.
@@ -65,7 +69,11 @@ class WeldedSurface {
   void for_each_triangle(std::int32_t leaf, Visit visit) const;
   bool emitting(std::uint64_t cube) const;
   bool neighbour_key(std::uint64_t cube, int face, std::uint64_t* key) const;
+  void append_open_edges(std::int32_t leaf);
   void find_open_edges();
+  // Open edges change only at changed leaves, at live neighbours of dead
+  // ones, and at leaves that had open edges: only those are looked at.
+  void refresh_open_edges(std::vector<std::int32_t> look, const std::vector<std::int32_t>& dead);
   std::int32_t new_hole();
   std::int32_t find_hole(std::int32_t h);
 
@@ -81,6 +89,9 @@ class WeldedSurface {
   std::vector<std::uint64_t> leaf_cube_;
   std::vector<std::uint8_t> leaf_case_;
   std::vector<std::uint16_t> leaf_mask_;  // kept case triangles
+  std::vector<std::uint32_t> leaf_first_;  // its case triangles start here in triangles_
+  std::vector<Triangle> triangles_;
+  std::size_t leaf_vertex_base_ = 0;       // add_leaves(): where the last brick's vertices begin
   std::vector<std::uint8_t> leaf_alive_;
   FlatHashMap leaf_index_{64};             // cube -> leaf
   std::size_t live_triangles_ = 0;
