@@ -15,6 +15,7 @@ long long now_ms() {
 }  // namespace
 
 void set_progress_sink(ProgressSink sink) { g_sink = std::move(sink); }
+ProgressSink progress_sink() { return g_sink; }
 
 void Progress::set_quiet(bool quiet) { g_quiet = quiet; }
 bool Progress::enabled() { return !g_quiet && bool(g_sink); }

@@ -18,6 +18,8 @@ using ProgressSink = std::function<void(const std::string& label, double fractio
 // Installs `sink` for all later stages (an empty function removes it). Not
 // thread-safe against running work: set it before starting.
 void set_progress_sink(ProgressSink sink);
+// The sink installed now (empty when none), so that a caller can wrap it.
+ProgressSink progress_sink();
 
 class Progress {
  public:

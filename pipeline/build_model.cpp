@@ -6,6 +6,7 @@
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
 #include "lod/octree_order.h"
+#include "pipeline/build_progress.h"
 #include "reconstruct/resolution_guard.h"
 
 #include <chrono>
@@ -66,9 +67,12 @@ LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mes
   BuildReport& report = report_out ? *report_out : local;
   report.points = points.size();
   report.mesh_input = mesh != nullptr;
+  const bool reconstructs = options.octree || !mesh;
+  // One progress for the whole build (reconstruction-relative shares).
+  BuildProgress progress(options.octree ? 4.0 : 0.0, options.clusters ? (reconstructs ? 1.6 : 1.0) : 0.0);
   auto stage = Clock::now();
   Reconstruction r;
-  if (options.octree || !mesh) {
+  if (reconstructs) {
     r = reconstruct_within_budget(points, options, &report);
     report.reconstruct = r.stats;
     report.warnings = r.warnings;
@@ -84,6 +88,7 @@ LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mes
   stage = Clock::now();
   LodModel model;
   if (options.octree) {
+    progress.octree_started();
     OctreeOptions octree;
     octree.metric = options.metric;
     McOctree tree = build_mc_octree(r, octree);
@@ -91,6 +96,7 @@ LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mes
     LodArray lod = number_nodes(tree);
     model = model_from_octree(std::move(tree), std::move(lod));
     report.seconds_numbering = seconds_since(numbering);
+    progress.octree_finished();
   }
   report.seconds_octree = seconds_since(stage);
 

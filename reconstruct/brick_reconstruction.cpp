@@ -3,6 +3,7 @@
 #include "core/compact_mesh.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/stopwatch.h"
 #include "io/atomic_file.h"
 #include "reconstruct/brick_surface.h"
 #include "reconstruct/cube_table.h"
@@ -402,13 +403,8 @@ BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& op
 
 Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const ReconstructOptions& options,
                                      const BrickOptions& brick_options, BrickStats* stats_out) {
-  using clock = std::chrono::steady_clock;
-  auto lap = [t = clock::now()]() mutable {
-    const auto now = clock::now();
-    const double s = std::chrono::duration<double>(now - t).count();
-    t = now;
-    return s;
-  };
+  Stopwatch watch;
+  auto lap = [&watch] { return watch.lap(); };
   for (std::size_t i = 0; i < points.size(); ++i)
     if (!points.positions[i].allFinite() || !points.normals[i].allFinite())
       throw InputError("", "input point " + std::to_string(i) + " has non-finite coordinates or normal");

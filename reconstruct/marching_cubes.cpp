@@ -2,10 +2,13 @@
 
 #include "core/error.h"
 #include "core/flat_hash.h"
+#include "core/union_find.h"
 #include "core/progress.h"
+#include "core/stopwatch.h"
 #include "reconstruct/brick_surface.h"
 #include "reconstruct/cube_table.h"
 #include "reconstruct/hole_filling.h"
+#include "reconstruct/open_loops.h"
 #include "reconstruct/resolution_guard.h"
 
 #include <omp.h>
@@ -50,16 +53,6 @@ int shared_face(int e0, int e1) {
     }
   return -1;
 }
-
-struct UnionFind {
-  std::vector<std::int32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  std::int32_t find(std::int32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::int32_t a, std::int32_t b) { parent[find(a)] = find(b); }
-};
 
 // The sparse grid and the surface on it, built in stages: seed cubes, surface
 // following, one emission, then piece removal and hole closing as local edits
@@ -177,30 +170,21 @@ class SurfaceBuilder {
   // of cubes added.
   std::size_t grow_into_small_holes(std::size_t max_edges) {
     if (open_.empty()) return 0;
-    // Loops of the open edges, over their own vertices only.
-    FlatHashMap local(open_.size() * 2);
-    UnionFind loops(0);
-    auto local_id = [&](std::int32_t v) {
-      const std::int32_t fresh = std::int32_t(loops.parent.size());
-      const std::int32_t id = local.insert(std::uint64_t(v), fresh);
-      if (id == fresh) loops.parent.push_back(fresh);
-      return id;
-    };
-    for (const OpenEdge& e : open_) loops.unite(local_id(e.a), local_id(e.b));
-    std::vector<std::int32_t> loop_edges(loops.parent.size(), 0);
-    for (const OpenEdge& e : open_) ++loop_edges[loops.find(local.find(std::uint64_t(e.a)))];
+    const OpenLoops loops = open_loops(open_);
     // Each hole keeps one id across rounds: a loop inherits the ids of the grown
     // cubes on its rim, and ids that meet in one loop are merged.
-    std::vector<std::int32_t> loop_hole(loops.parent.size(), -1);
-    for (const OpenEdge& e : open_) {
-      const std::int32_t root = loops.find(local.find(std::uint64_t(e.a)));
-      if (std::size_t(loop_edges[root]) > max_edges) continue;
+    std::vector<std::int32_t> loop_hole(loops.edges.size(), -1);
+    for (std::size_t i = 0; i < open_.size(); ++i) {
+      const OpenEdge& e = open_[i];
+      const std::int32_t root = loops.loop[i];
+      if (std::size_t(loops.edges[root]) > max_edges) continue;
       if (loop_hole[root] < 0) loop_hole[root] = new_hole();
       if (hole_of_[e.cube] >= 0) unite_holes(loop_hole[root], hole_of_[e.cube]);
     }
     std::vector<std::int32_t> grow;
-    for (const OpenEdge& e : open_) {
-      const std::int32_t root = loops.find(local.find(std::uint64_t(e.a)));
+    for (std::size_t i = 0; i < open_.size(); ++i) {
+      const OpenEdge& e = open_[i];
+      const std::int32_t root = loops.loop[i];
       if (loop_hole[root] < 0) continue;
       std::uint64_t key;
       if (!neighbour_key(e.cube, e.face, &key)) continue;
@@ -899,13 +883,8 @@ Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOption
   Reconstruction result;
   ReconstructStats& stats = result.stats;
   stats.points = points.size();
-  using clock = std::chrono::steady_clock;
-  auto lap = [t = clock::now()]() mutable {
-    const auto now = clock::now();
-    const double s = std::chrono::duration<double>(now - t).count();
-    t = now;
-    return s;
-  };
+  Stopwatch watch;
+  auto lap = [&watch] { return watch.lap(); };
   make_cube_grid(bounds(points.positions), options.resolution);  // checks the resolution first
   const ReconstructionEstimate estimate =
       check_resolution_fits(points, options.resolution, options.threads, options.memory_limit);

@@ -1,6 +1,8 @@
 #include "reconstruct/welded_surface.h"
 
+#include "core/union_find.h"
 #include "reconstruct/cube_table.h"
+#include "reconstruct/open_loops.h"
 
 #include <algorithm>
 #include <cmath>
@@ -42,16 +44,6 @@ const std::array<std::array<std::int8_t, 12>, 12>& face_of() {
   }();
   return table;
 }
-
-struct UnionFind {
-  std::vector<std::int32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  std::int32_t find(std::int32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::int32_t a, std::int32_t b) { parent[find(a)] = find(b); }
-};
 
 }  // namespace
 
@@ -268,22 +260,12 @@ std::int32_t WeldedSurface::find_hole(std::int32_t h) {
 
 std::size_t WeldedSurface::grow_into_small_holes(std::size_t max_edges, const CornerEvaluator& evaluate) {
   if (open_.empty()) return 0;
-  // Loops of the open edges, over their own vertices.
-  FlatHashMap local(open_.size() * 2);
-  UnionFind loops(0);
-  auto local_id = [&](std::int32_t v) {
-    const std::int32_t fresh = std::int32_t(loops.parent.size());
-    const std::int32_t id = local.insert(std::uint64_t(v), fresh);
-    if (id == fresh) loops.parent.push_back(fresh);
-    return id;
-  };
-  for (const OpenEdge& e : open_) loops.unite(local_id(e.a), local_id(e.b));
-  std::vector<std::int32_t> loop_edges(loops.parent.size(), 0);
-  for (const OpenEdge& e : open_) ++loop_edges[loops.find(local.find(std::uint64_t(e.a)))];
-  std::vector<std::int32_t> loop_hole(loops.parent.size(), -1);
-  for (const OpenEdge& e : open_) {
-    const std::int32_t root = loops.find(local.find(std::uint64_t(e.a)));
-    if (std::size_t(loop_edges[root]) > max_edges) continue;
+  const OpenLoops loops = open_loops(open_);
+  std::vector<std::int32_t> loop_hole(loops.edges.size(), -1);
+  for (std::size_t i = 0; i < open_.size(); ++i) {
+    const OpenEdge& e = open_[i];
+    const std::int32_t root = loops.loop[i];
+    if (std::size_t(loops.edges[root]) > max_edges) continue;
     if (loop_hole[root] < 0) loop_hole[root] = new_hole();
     const std::int32_t own = grown_.find(leaf_cube_[e.leaf]);
     if (own >= 0) hole_parent_[find_hole(loop_hole[root])] = find_hole(own);
@@ -294,8 +276,9 @@ std::size_t WeldedSurface::grow_into_small_holes(std::size_t max_edges, const Co
   // A cube across two holes' edges joins them, as in core.
   std::vector<std::uint64_t> grow;
   FlatHashMap hole_of(64);
-  for (const OpenEdge& e : open_) {
-    const std::int32_t root = loops.find(local.find(std::uint64_t(e.a)));
+  for (std::size_t i = 0; i < open_.size(); ++i) {
+    const OpenEdge& e = open_[i];
+    const std::int32_t root = loops.loop[i];
     if (loop_hole[root] < 0) continue;
     std::uint64_t key;
     if (!neighbour_key(leaf_cube_[e.leaf], e.face, &key)) continue;
