@@ -49,7 +49,7 @@ class WeldedSurface {
   std::size_t grow_into_small_holes(std::size_t max_edges, const CornerEvaluator& evaluate);
   std::size_t give_up_open_growth();
 
-  // Phase 3: the mesh, triangles in (cube, slot) order, vertices in lattice
+  // Phase 3: the mesh, triangles in Morton order of their cubes (then slot), vertices in lattice
   // edge order (those no live triangle uses included, as in core), and the
   // open edges as half-edges for fill_small_holes. Vertices added by growth
   // are listed in `new_vertices` for their colours.

@@ -1,10 +1,13 @@
 // Reconstruction brick by brick gives the in-core surface: the same triangles
 // at the same positions, on the bunny's real scans and on a scanned torus,
-// whatever the brick size; it resumes from the bricks a build left; and a
-// budget below one brick is refused with the minimum.
+// whatever the brick size; its cluster cuts are as close; it resumes from the
+// bricks a build left, also after SIGKILL; and a budget below one brick is
+// refused with the minimum.
 #include "acquisition/load_inputs.h"
 #include "core/error.h"
+#include "measure/surface_distance.h"
 #include "measure/topology.h"
+#include "pipeline/build_model.h"
 #include "reconstruct/brick_reconstruction.h"
 
 #include "test_shapes.h"
@@ -202,4 +205,35 @@ TEST(BrickReconstruction, TheCommandLineRefusesABudgetBelowOneBrick) {
                                               "/data/bunny/bun.conf --brick-cubes 64 -o " + (dir / "o.mco").string());
   EXPECT_NE(o.status, 0);
   EXPECT_NE(o.output.find("--structure clusters"), std::string::npos) << o.output;
+}
+
+TEST(BrickReconstruction, ClusterCutsOfABrickBuildAreAsCloseAsInCore) {
+  // The hierarchy over the welded mesh (another order of the same triangles)
+  // is as good as over the in-core mesh.
+  BuildOptions options;
+  options.reconstruct.resolution = 128;
+  options.octree = false;
+  options.strategy = BuildStrategy::kInCore;
+  const LodModel core = build_model(bunny_points(), nullptr, options);
+  options.strategy = BuildStrategy::kBricks;
+  options.brick_cubes = 32;
+  options.work_dir = fresh_dir("cuts").string();
+  BuildReport report;
+  const LodModel bricks = build_model(bunny_points(), nullptr, options, &report);
+  ASSERT_TRUE(report.in_bricks);
+  LevelExtractor full(core, LodStructure::kClusters);
+  const TriangleMesh reference = compact_level(core, full.extract(LevelRequest::at_percent(100)).triangles);
+  CompareOptions compare;
+  compare.samples = 100000;
+  auto error = [&](const LodModel& model, std::int64_t triangles) {
+    LevelExtractor cuts(model, LodStructure::kClusters);
+    const SurfaceComparison c =
+        compare_surfaces(compact_level(model, cuts.extract(LevelRequest::at_triangles(triangles)).triangles),
+                         reference, compare);
+    return (c.a_to_b.mean + c.b_to_a.mean) / 2;
+  };
+  for (std::int64_t triangles : {1000, 4000, 16000}) {
+    const double in_core = error(core, triangles), in_bricks = error(bricks, triangles);
+    EXPECT_LE(in_bricks, 1.1 * in_core) << triangles << " triangles";
+  }
 }
