@@ -91,6 +91,15 @@ void add_build_command(CLI::App& app) {
                        {"runs", report.bricks.brick_runs}, {"resumed", report.bricks.bricks_resumed},
                        {"follow_passes", report.bricks.follow_passes}, {"halo", report.plan.halo},
                        {"widest_halo", report.bricks.widest_halo}};
+      const double mib = 1 << 20;
+      j["memory_mib"] = {{"budget", report.budget_bytes / mib},
+                         {"estimated", {{"in_core_reconstruction", report.estimated_bytes / mib},
+                                        {"brick", report.plan.brick_bytes / mib},
+                                        {"weld", report.plan.weld_bytes / mib},
+                                        {"clusters", report.estimated_cluster_bytes / mib}}},
+                         {"peak_after", {{"reconstruct", report.peak_bytes_reconstruct / mib},
+                                         {"octree", report.peak_bytes_octree / mib},
+                                         {"clusters", report.peak_bytes_clusters / mib}}}};
       j["output"] = args->output;
       j["seconds"] = {{"total", since(start)}, {"read", read_seconds}, {"reconstruct", reconstruct_seconds},
                       {"octree", octree_seconds}, {"clusters", cluster_seconds}, {"write", write_seconds}};

@@ -49,6 +49,7 @@ void add_reconstruct_command(CLI::App& app) {
     only_mesh.octree = only_mesh.clusters = false;
     BuildReport report_bricks;
     Reconstruction r = reconstruct_within_budget(points, only_mesh, &report_bricks);
+    for (const std::string& warning : report_bricks.warnings) warn(warning);
     require_surface(args->inputs, r, options.resolution);
     const auto write_start = clock::now();
     MeshWriteOptions write;

@@ -38,11 +38,15 @@ struct BuildReport {
   bool mesh_input = false;        // one mesh given: its own triangles are the clusters' full detail
   bool in_bricks = false;         // the strategy that ran
   double estimated_bytes = 0;     // the in-core reconstruction's estimate
+  double budget_bytes = 0;        // the budget that held: --memory, or what was available
   BrickPlan plan;                 // when in bricks
   BrickStats bricks;              // when in bricks
   ReconstructStats reconstruct;
   AcquisitionReport acquisition;
   std::vector<std::string> warnings;
+  // Memory: estimated before each stage, and the process's peak measured after it.
+  double estimated_cluster_bytes = 0;
+  double peak_bytes_reconstruct = 0, peak_bytes_octree = 0, peak_bytes_clusters = 0;
   std::size_t full_triangles = 0;  // the reconstruction's (or the mesh input's)
   // Wall-clock seconds per stage; the octree's build is seconds_octree, of
   // which seconds_numbering is the priority numbering.

@@ -14,6 +14,7 @@
 #include "test_support.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <open3d/geometry/TriangleMesh.h>
 
 #include <algorithm>
@@ -236,4 +237,25 @@ TEST(BrickReconstruction, ClusterCutsOfABrickBuildAreAsCloseAsInCore) {
     const double in_core = error(core, triangles), in_bricks = error(bricks, triangles);
     EXPECT_LE(in_bricks, 1.1 * in_core) << triangles << " triangles";
   }
+}
+
+TEST(BrickReconstruction, TheBuildReportsItsMemoryEstimatedAndMeasured) {
+  using scan2lod::testing::run_cli;
+  const fs::path dir = fresh_dir("memory");
+  fs::create_directories(dir);
+  const scan2lod::testing::CliRun r =
+      run_cli("build " + std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf --structure clusters -r 128 " +
+                  "--brick-cubes 32 --memory 300M --json -o " + (dir / "m.mco").string(),
+              /*merge_stderr=*/false);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  const nlohmann::json& m = j.at("memory_mib");
+  EXPECT_DOUBLE_EQ(m.at("budget").get<double>(), 300.0);
+  EXPECT_GT(m.at("estimated").at("brick").get<double>(), 0.0);
+  EXPECT_LE(m.at("estimated").at("brick").get<double>(), 300.0);
+  EXPECT_GT(m.at("estimated").at("weld").get<double>(), 0.0);
+  EXPECT_GT(m.at("estimated").at("clusters").get<double>(), 0.0);
+  EXPECT_GT(m.at("peak_after").at("reconstruct").get<double>(), 10.0);
+  EXPECT_GE(m.at("peak_after").at("clusters").get<double>(), m.at("peak_after").at("reconstruct").get<double>());
+  EXPECT_GE(j.at("bricks").at("bricks").get<int>(), 8);
 }
