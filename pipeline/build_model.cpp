@@ -54,6 +54,15 @@ Reconstruction reconstruct_within_budget(const OrientedPoints& points, const Bui
   const double budget = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
   report->budget_bytes = budget;
   report->in_bricks = choose_bricks(points, options, budget, report);
+  // The octree needs every leaf cube at once. With no budget given, a build
+  // that fits the machine (the limit before bricks existed) stays in core.
+  if (report->in_bricks && options.octree && options.strategy == BuildStrategy::kAutomatic &&
+      options.memory_bytes <= 0 && report->estimated_bytes <= machine_memory_bytes()) {
+    report->in_bricks = false;
+    report->warnings.push_back("the reconstruction needs about " + megabytes(report->estimated_bytes) +
+                               " in core, more than the " + megabytes(budget) +
+                               " available now; it runs in core for the octree (--structure clusters runs in bricks)");
+  }
   if (!report->in_bricks) {
     ReconstructOptions in_core = options.reconstruct;
     if (in_core.memory_limit <= 0 && options.memory_bytes > 0) in_core.memory_limit = options.memory_bytes;

@@ -443,7 +443,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
   // brick whose halo holds points runs; else the bricks that hold points.
   struct State {
     std::vector<std::uint64_t> wanted, followed, requests, border;
-    bool pending = false, done = false, empty = false;
+    bool pending = false, done = false;
   };
   std::map<std::uint32_t, State> bricks;
   for (std::uint32_t b : bins.bricks) bricks[b].pending = true;
