@@ -1,6 +1,7 @@
 #include "lod/cluster_hierarchy.h"
 
 #include "core/error.h"
+#include "core/morton.h"
 #include "lod/cluster_partition.h"
 #include "lod/group_simplify.h"
 
@@ -194,21 +195,12 @@ SplitGroup split_large_mesh(ArrayView<Vec3f> positions, const std::vector<Triang
   Aabb box;
   for (std::size_t v = 0; v < positions.size(); ++v) box.extend(positions[v]);
   const Vec3f scale = (box.max - box.min).cwiseMax(Vec3f::Constant(1e-30f)).cwiseInverse() * float((1 << 20) - 1);
-  auto spread = [](std::uint64_t v) {  // 20 bits -> every third of 60
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-  };
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order(triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const Triangle& tri = triangles[t];
     const Vec3f c = (positions[std::size_t(tri[0])] + positions[std::size_t(tri[1])] + positions[std::size_t(tri[2])]) / 3.f;
     const Vec3f q = ((c - box.min).cwiseProduct(scale)).cwiseMax(Vec3f::Zero());
-    order[t] = {spread(std::uint64_t(q.x())) | spread(std::uint64_t(q.y())) << 1 | spread(std::uint64_t(q.z())) << 2,
-                std::uint32_t(t)};
+    order[t] = {morton_code(std::uint64_t(q.x()), std::uint64_t(q.y()), std::uint64_t(q.z())), std::uint32_t(t)};
   }
   std::sort(order.begin(), order.end());
   const std::size_t runs = (triangles.size() + kSplitRun - 1) / kSplitRun;

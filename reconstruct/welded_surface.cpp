@@ -1,5 +1,6 @@
 #include "reconstruct/welded_surface.h"
 
+#include "core/morton.h"
 #include "core/union_find.h"
 #include "reconstruct/cube_table.h"
 #include "reconstruct/open_loops.h"
@@ -17,19 +18,8 @@ std::uint64_t corner_key_of(std::uint64_t cube, int corner) {
   return cube + (corner & 1) * kAxisStep[0] + ((corner >> 1) & 1) * kAxisStep[1] + ((corner >> 2) & 1) * kAxisStep[2];
 }
 
-// The Morton (Z-order) code of a packed cube key: bits of x, y and z interleaved.
-std::uint64_t morton(std::uint64_t cube) {
-  auto spread = [](std::uint64_t v) {  // 20 bits -> every third of 60
-    v &= 0xfffff;
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-  };
-  return spread(cube) | spread(cube >> 20) << 1 | spread(cube >> 40) << 2;
-}
+// The Morton code of a packed cube key.
+std::uint64_t morton(std::uint64_t cube) { return morton_code(cube, cube >> 20, cube >> 40); }
 
 std::uint64_t edge_key_of(std::uint64_t cube, int edge) {
   return (corner_key_of(cube, edge_corner(edge, 0)) << 2) | std::uint64_t(edge / 4);
