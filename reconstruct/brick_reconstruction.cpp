@@ -53,7 +53,9 @@ std::uint64_t mix_bytes(std::uint64_t h, const std::vector<T>& values) {
 }
 
 std::uint64_t plan_key(const OrientedPoints& points, const ReconstructOptions& o, int brick_cubes) {
-  std::uint64_t h = 0x5332'4c42'524b'0001ull;  // format of the brick files
+  std::uint64_t h = 0x5332'4c42'524b'0002ull;  // format of the brick files
+  // Another release may decide differently: its bricks are not taken.
+  for (const char* c = SCAN2LOD_VERSION; *c; ++c) h = mix(h, std::uint64_t(*c));
   h = mix_bytes(h, points.positions);
   h = mix_bytes(h, points.normals);
   h = mix_bytes(h, points.colors);
@@ -147,6 +149,22 @@ struct BrickFile {
   BrickSurface surface;
 };
 
+// What a finished brick holds, hashed: a brick whose bytes changed on disk is
+// run again rather than trusted.
+std::uint64_t checksum(const BrickFile& b) {
+  const BrickSurface& s = b.surface;
+  std::uint64_t h = mix(mix(mix(0, s.cubes_touched), s.corners_evaluated), s.following_rounds);
+  h = mix_bytes(h, b.followed);
+  h = mix_bytes(h, s.vertex_edges);
+  h = mix_bytes(h, s.positions);
+  h = mix_bytes(h, s.colors);
+  h = mix_bytes(h, s.leaf_cubes);
+  h = mix_bytes(h, s.leaf_cases);
+  h = mix_bytes(h, s.triangles);
+  h = mix_bytes(h, s.requests);
+  return mix_bytes(h, s.border_cubes);
+}
+
 void write_brick(const std::string& path, std::uint64_t key, const BrickFile& b) {
   write_atomically(path, [&](const std::string& tmp) {
     std::ofstream out(tmp, std::ios::binary);
@@ -163,12 +181,15 @@ void write_brick(const std::string& path, std::uint64_t key, const BrickFile& b)
     put(out, b.surface.triangles);
     put(out, b.surface.requests);
     put(out, b.surface.border_cubes);
+    const std::uint64_t sum = checksum(b);
+    out.write(reinterpret_cast<const char*>(&sum), 8);
     out.flush();
     if (!out) throw InputError(tmp, "cannot write the brick: " + std::string(std::strerror(errno)));
   });
 }
 
-// A finished brick of this plan, or false (missing, another plan's, or cut short).
+// A finished brick of this plan, or false (missing, another plan's or
+// program's, cut short, or changed).
 bool read_brick(const std::string& path, std::uint64_t key, BrickFile* b) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
@@ -190,6 +211,8 @@ bool read_brick(const std::string& path, std::uint64_t key, BrickFile* b) {
   std::size_t triangles = 0;
   for (std::uint8_t c : s.leaf_cases) triangles += cube_cases()[c].triangle_count;
   if (triangles != s.triangles.size()) return false;
+  std::uint64_t sum = 0;
+  if (!in.read(reinterpret_cast<char*>(&sum), 8) || sum != checksum(*b)) return false;
   for (const Triangle& t : s.triangles)
     for (std::int32_t v : t)
       if (v < 0 || std::size_t(v) >= s.positions.size()) return false;

@@ -133,13 +133,22 @@ TEST(BrickReconstruction, ResumesFromFinishedBricksWithTheSameSurface) {
   bricks.brick_cubes = 16;
   BrickStats first;
   const Reconstruction a = reconstruct_in_bricks(bunny_points(), options, bricks, &first);
-  // As a killed build leaves it: some bricks never written, one cut short.
+  // As a killed build leaves it: some bricks never written, one cut short;
+  // and one changed on disk.
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(fs::path(bricks.work_dir) / "bricks")) files.push_back(e.path());
   std::sort(files.begin(), files.end());
   ASSERT_GT(files.size(), 8u);
   for (std::size_t i = 0; i < files.size(); i += 3) fs::remove(files[i]);
   fs::resize_file(files[1], fs::file_size(files[1]) / 2);
+  {
+    // One flipped byte in the middle of another: run again, not trusted.
+    std::fstream f(files[2], std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(std::streamoff(fs::file_size(files[2]) / 2));
+    const char byte = char(f.peek() ^ 0x5a);
+    f.seekp(std::streamoff(fs::file_size(files[2]) / 2));
+    f.put(byte);
+  }
   BrickStats second;
   const Reconstruction b = reconstruct_in_bricks(bunny_points(), options, bricks, &second);
   EXPECT_GT(second.bricks_resumed, 0u);
