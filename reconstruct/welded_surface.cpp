@@ -18,6 +18,11 @@ std::uint64_t corner_key_of(std::uint64_t cube, int corner) {
   return cube + (corner & 1) * kAxisStep[0] + ((corner >> 1) & 1) * kAxisStep[1] + ((corner >> 2) & 1) * kAxisStep[2];
 }
 
+template <class T>
+void release(std::vector<T>* v) {
+  std::vector<T>().swap(*v);
+}
+
 // The Morton code of a packed cube key.
 std::uint64_t morton(std::uint64_t cube) { return morton_code(cube, cube >> 20, cube >> 40); }
 
@@ -417,6 +422,12 @@ void WeldedSurface::finish(TriangleMesh* mesh, std::vector<std::array<std::int32
   std::iota(new_vertices->begin(), new_vertices->end(), std::int32_t(welded_vertices_));
   mesh->positions = std::move(positions_);
   mesh->colors = std::move(colors_);
+  // The surface is the mesh now: its leaves go before the mesh is worked on.
+  release(&order);
+  release(&vertex_edge_), release(&triangles_), release(&leaf_cube_), release(&leaf_case_);
+  release(&leaf_mask_), release(&leaf_first_), release(&leaf_alive_), release(&grown_list_);
+  release(&corner_values_), release(&hole_parent_), release(&open_);
+  leaf_index_ = FlatHashMap(), grown_ = FlatHashMap(), corner_index_ = FlatHashMap(), grown_vertex_ = FlatHashMap();
 }
 
 }  // namespace scan2lod

@@ -52,7 +52,8 @@ class WeldedSurface {
   // Phase 3: the mesh, triangles in Morton order of their cubes (then slot), vertices in lattice
   // edge order (those no live triangle uses included, as in core), and the
   // open edges as half-edges for fill_small_holes. Vertices added by growth
-  // are listed in `new_vertices` for their colours.
+  // are listed in `new_vertices` for their colours. The surface is empty
+  // afterwards: its memory goes before the mesh is worked on.
   void finish(TriangleMesh* mesh, std::vector<std::array<std::int32_t, 2>>* boundary,
               std::vector<std::int32_t>* new_vertices);
 
