@@ -20,8 +20,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-std::string megabytes(double bytes) { return std::to_string(std::llround(bytes / (1 << 20))) + " MiB"; }
-
 // The process's peak resident memory so far.
 double peak_bytes() {
   rusage usage{};
@@ -59,8 +57,8 @@ Reconstruction reconstruct_within_budget(const OrientedPoints& points, const Bui
   if (report->in_bricks && options.octree && options.strategy == BuildStrategy::kAutomatic &&
       options.memory_bytes <= 0 && report->estimated_bytes <= machine_memory_bytes()) {
     report->in_bricks = false;
-    report->warnings.push_back("the reconstruction needs about " + megabytes(report->estimated_bytes) +
-                               " in core, more than the " + megabytes(budget) +
+    report->warnings.push_back("the reconstruction needs about " + binary_size(report->estimated_bytes) +
+                               " in core, more than the " + binary_size(budget) +
                                " available now; it runs in core for the octree (--structure clusters runs in bricks)");
   }
   if (!report->in_bricks) {
@@ -69,8 +67,8 @@ Reconstruction reconstruct_within_budget(const OrientedPoints& points, const Bui
     return reconstruct(points, in_core);
   }
   if (options.octree)
-    throw InputError("", "the reconstruction needs about " + megabytes(report->estimated_bytes) +
-                             " in core and the budget is " + megabytes(budget) +
+    throw InputError("", "the reconstruction needs about " + binary_size(report->estimated_bytes) +
+                             " in core and the budget is " + binary_size(budget) +
                              ": in bricks only the cluster hierarchy can be built (--structure clusters), since "
                              "the octree needs every leaf cube at once");
   if (options.work_dir.empty()) throw InputError("", "a build in bricks needs a work folder");
@@ -81,10 +79,10 @@ Reconstruction reconstruct_within_budget(const OrientedPoints& points, const Bui
   report->plan = plan_bricks(points, options.reconstruct, bricks);
   // The bricks hold the budget; the weld after them does not yet: say so.
   if (report->plan.weld_bytes > budget)
-    report->warnings.push_back("the welded surface will need about " + megabytes(report->plan.weld_bytes) +
-                               ", over the budget of " + megabytes(budget) +
+    report->warnings.push_back("the welded surface will need about " + binary_size(report->plan.weld_bytes) +
+                               ", over the budget of " + binary_size(budget) +
                                ": the bricks keep to it, the weld of their surfaces is not out of core yet");
-  return reconstruct_in_bricks(points, options.reconstruct, bricks, &report->bricks);
+  return reconstruct_in_bricks(points, options.reconstruct, bricks, &report->bricks, &report->plan);
 }
 
 namespace {
@@ -136,8 +134,8 @@ LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mes
     report.estimated_cluster_bytes = kClusterBytesPerTriangle * double(report.full_triangles);
     const double budget = report.budget_bytes > 0 ? report.budget_bytes : available_memory_bytes();
     if (report.in_bricks && report.estimated_cluster_bytes > budget)
-      report.warnings.push_back("the cluster hierarchy will need about " + megabytes(report.estimated_cluster_bytes) +
-                                ", over the budget of " + megabytes(budget) + ": it is not built out of core yet");
+      report.warnings.push_back("the cluster hierarchy will need about " + binary_size(report.estimated_cluster_bytes) +
+                                ", over the budget of " + binary_size(budget) + ": it is not built out of core yet");
     Progress bar("clusters", 1000);
     ClusterOptions clusters;
     clusters.threads = options.reconstruct.threads;

@@ -85,10 +85,15 @@ double influence_factor(const ReconstructOptions& o) {
   return std::max(std::sqrt(d * d + 105.0 * k * k), double(o.reach));
 }
 
+// The reach of a point whose scale is `scale`, in world units: its factor of
+// scales and the four cube diagonals of the colours.
+double influence(double factor, double scale, double cube_size) {
+  return factor * scale + 4.0 * std::sqrt(3.0) * cube_size;
+}
+
 // The halo every brick gets: margin seeds and the cube-sized part of the influence.
 double base_halo(const ReconstructOptions& o, double cube_size) {
-  const double diagonal = cube_size * std::sqrt(3.0);
-  return std::max(influence_factor(o) * cube_size + 4.0 * diagonal, (o.margin + 1) * diagonal);
+  return std::max(influence(influence_factor(o), cube_size, cube_size), (o.margin + 1) * cube_size * std::sqrt(3.0));
 }
 
 int brick_of(const CubeGrid& grid, int brick_cubes, int per_axis, const Vec3f& p, const Vec3d& offset) {
@@ -116,14 +121,10 @@ std::size_t largest_brick(const OrientedPoints& points, const CubeGrid& grid, in
 // The weld holds the whole surface: leaves, triangles, vertices and their
 // keys, then the mesh: about 160 bytes a touched cube at its peak (653 MiB
 // for 3.6 M cubes and 1.05 M points, measured). On disk a cube's share takes
-// about 36 bytes.
+// about 54 bytes (bench/scale: 184 MiB for 3.6 M cubes in 42 bricks, 744 MiB
+// for 14.6 M in 194); 60 leaves room.
 constexpr double kWeldBytesPerCube = 160.0;
-constexpr double kDiskBytesPerCube = 36.0;
-
-std::string megabytes(double bytes) {
-  if (bytes >= 10.0 * (1 << 30)) return std::to_string(std::llround(bytes / (1 << 30))) + " GiB";
-  return std::to_string(std::llround(bytes / (1 << 20))) + " MiB";
-}
+constexpr double kDiskBytesPerCube = 60.0;
 
 // ---- brick files -----------------------------------------------------------
 
@@ -245,23 +246,23 @@ struct Bins {
 // of wide spacing, at a scan's grazing rim, reaches far).
 Bins bin_points(const OrientedPoints& points, const BrickPlan& plan, const ReconstructOptions& options) {
   const int n = plan.bricks_per_axis;
-  const double h = plan.grid.cube_size, extra = 4.0 * h * std::sqrt(3.0);
+  const double h = plan.grid.cube_size;
   ReconstructOptions relaxed = options;
   relaxed.distance.max_distance *= 2.f;
   const double factor = influence_factor(options), relaxed_factor = influence_factor(relaxed);
   Bins bins;
   bins.base = float(plan.halo);
-  bins.relaxed_base = float(relaxed_factor * h + extra);
+  bins.relaxed_base = float(influence(relaxed_factor, h, h));
   std::vector<std::uint64_t> pairs(points.size());
   const bool spaced = points.spacing.size() == points.size();
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Vec3f& p = points.positions[i];
     pairs[i] = std::uint64_t(brick_of(plan.grid, plan.brick_cubes, n, p, Vec3d::Zero())) << 32 | i;
     if (!spaced || points.spacing[i] <= h) continue;
-    const double reach = relaxed_factor * double(points.spacing[i]) + extra;
+    const double reach = influence(relaxed_factor, points.spacing[i], h);
     const Vec3d r = Vec3d::Constant(reach);
     const int lo = brick_of(plan.grid, plan.brick_cubes, n, p, -r), hi = brick_of(plan.grid, plan.brick_cubes, n, p, r);
-    const float normal = float(factor * double(points.spacing[i]) + extra);
+    const float normal = float(influence(factor, points.spacing[i], h));
     for (int z = lo / (n * n); z <= hi / (n * n); ++z)
       for (int y = lo / n % n; y <= hi / n % n; ++y)
         for (int x = lo % n; x <= hi % n; ++x) {
@@ -407,32 +408,34 @@ BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& op
     auto countable = [&](int b) { const double n = std::ceil(double(R) / b); return n * n * n < 4294967295.0; };
     for (B = R; B > smallest && countable(B / 2) && brick_bytes(B) > budget; B /= 2) {}
     if (brick_bytes(B) > budget)
-      throw InputError("", "--memory " + megabytes(budget) + " is below what one brick needs at resolution " +
-                               std::to_string(R) + ": at least " + megabytes(brick_bytes(B)) + " (bricks of " +
+      throw InputError("", "--memory " + binary_size(budget) + " is below what one brick needs at resolution " +
+                               std::to_string(R) + ": at least " + binary_size(brick_bytes(B)) + " (bricks of " +
                                std::to_string(B) + " cubes, each with a halo of " + std::to_string(halo_cubes) +
                                " cubes)");
   }
   plan.brick_cubes = B;
   plan.bricks_per_axis = (R + B - 1) / B;
   if (double(plan.bricks_per_axis) * plan.bricks_per_axis * plan.bricks_per_axis >= 4294967295.0)
-    throw InputError("", "resolution " + std::to_string(R) + " would need about " + megabytes(whole.bytes) +
+    throw InputError("", "resolution " + std::to_string(R) + " would need about " + binary_size(whole.bytes) +
                              " in core, and more than 2^32 bricks of " + std::to_string(B) +
                              " cubes: choose a coarser --resolution");
   plan.brick_bytes = brick_bytes(B);
   plan.weld_bytes = kWeldBytesPerCube * whole.cubes + 40.0 * double(points.size());
-  plan.disk_bytes = kDiskBytesPerCube * whole.cubes * (1.0 + 0.1 * double(plan.bricks_per_axis));
+  plan.disk_bytes = kDiskBytesPerCube * whole.cubes;
+  plan.cubes = whole.cubes;
   plan.key = plan_key(points, options, B);
   return plan;
 }
 
 Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const ReconstructOptions& options,
-                                     const BrickOptions& brick_options, BrickStats* stats_out) {
+                                     const BrickOptions& brick_options, BrickStats* stats_out,
+                                     const BrickPlan* given_plan) {
   Stopwatch watch;
   auto lap = [&watch] { return watch.lap(); };
   for (std::size_t i = 0; i < points.size(); ++i)
     if (!points.positions[i].allFinite() || !points.normals[i].allFinite())
       throw InputError("", "input point " + std::to_string(i) + " has non-finite coordinates or normal");
-  const BrickPlan plan = plan_bricks(points, options, brick_options);
+  const BrickPlan plan = given_plan ? *given_plan : plan_bricks(points, options, brick_options);
   Reconstruction result;
   ReconstructStats& stats = result.stats;
   stats.points = points.size();
@@ -446,8 +449,8 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
   const fs::space_info space = fs::space(existing, ec);
   if (!ec && double(space.available) < plan.disk_bytes)
     throw InputError(brick_options.work_dir, "resolution " + std::to_string(options.resolution) +
-                                                 " would need about " + megabytes(plan.disk_bytes) +
-                                                 " of disk for its bricks and " + megabytes(double(space.available)) +
+                                                 " would need about " + binary_size(plan.disk_bytes) +
+                                                 " of disk for its bricks and " + binary_size(double(space.available)) +
                                                  " are free there");
   const std::string dir = (fs::path(brick_options.work_dir) / "bricks").string();
   fs::create_directories(dir, ec);
@@ -480,7 +483,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
             bricks[std::uint32_t((dz * n + dy) * n + dx)].pending = true;
     }
   BrickStats bs;
-  const double cubes_per_point = estimate_reconstruction(points, options.resolution).cubes / double(points.size());
+  const double cubes_per_point = plan.cubes / double(points.size());
   Progress progress("bricks", bricks.size());
   for (;;) {
     bool ran = false;

@@ -29,7 +29,7 @@ struct BrickPlan {
   int bricks_per_axis = 0;   // ceil(R / B)
   double halo = 0;           // world units of neighbours around a brick, at least (bricks near
                              // points of wide spacing get more: their influence reaches farther)
-  std::size_t bricks = 0;    // bricks that hold points
+  double cubes = 0;          // cubes the whole surface is expected to touch (estimate_reconstruction)
   double brick_bytes = 0;    // estimated peak of the largest brick
   double weld_bytes = 0;     // estimated peak of welding the surface
   double disk_bytes = 0;     // estimated size of the finished bricks
@@ -54,7 +54,9 @@ struct BrickStats {
 // closing, holes are closed by rim triangles only (fill_small_holes), not by
 // marching on into cubes. `leaves` stays empty: the octree needs the in-core
 // build.
+// `plan`: plan_bricks(points, options, bricks), when the caller made it already.
 Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const ReconstructOptions& options,
-                                     const BrickOptions& bricks, BrickStats* stats = nullptr);
+                                     const BrickOptions& bricks, BrickStats* stats = nullptr,
+                                     const BrickPlan* plan = nullptr);
 
 }  // namespace scan2lod

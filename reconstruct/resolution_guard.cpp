@@ -95,6 +95,11 @@ double machine_memory_bytes() {
   return limit > 0 && limit < physical ? limit : physical;
 }
 
+std::string binary_size(double bytes) {
+  if (bytes >= 10.0 * (1 << 30)) return std::to_string(std::llround(bytes / (1 << 30))) + " GiB";
+  return std::to_string(std::llround(bytes / (1 << 20))) + " MiB";
+}
+
 double available_memory_bytes() {
   double available = machine_memory_bytes();
   std::ifstream meminfo("/proc/meminfo");

@@ -31,6 +31,9 @@ double reconstruction_bytes(double points, double cubes);
 // The memory this process may use: physical memory, or its cgroup's limit when lower.
 double machine_memory_bytes();
 
+// A size in binary units as --memory takes them: "400 MiB", "12 GiB".
+std::string binary_size(double bytes);
+
 // What this process may still take: the kernel's MemAvailable (or the
 // cgroup's limit less its usage, when lower), less a tenth as a margin.
 double available_memory_bytes();
