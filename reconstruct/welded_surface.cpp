@@ -107,25 +107,8 @@ void WeldedSurface::weld() {
   welded_vertices_ = vertex_edge_.size();
   for (Triangle& t : triangles_)
     for (std::int32_t& v : t) v = rank[v];
-  // Leaves: each cube is emitted by one brick only; sorted by cube.
-  std::vector<std::int32_t> by_cube(leaf_cube_.size());
-  std::iota(by_cube.begin(), by_cube.end(), 0);
-  std::sort(by_cube.begin(), by_cube.end(), [&](std::int32_t a, std::int32_t b) { return leaf_cube_[a] < leaf_cube_[b]; });
-  std::vector<std::uint64_t> cubes(by_cube.size());
-  std::vector<std::uint8_t> cases(by_cube.size());
-  std::vector<std::uint32_t> first(by_cube.size());
-  std::vector<Triangle> triangles;
-  triangles.reserve(triangles_.size());
-  for (std::size_t i = 0; i < by_cube.size(); ++i) {
-    const std::int32_t l = by_cube[i];
-    cubes[i] = leaf_cube_[l], cases[i] = leaf_case_[l], first[i] = std::uint32_t(triangles.size());
-    const int count = cube_cases()[leaf_case_[l]].triangle_count;
-    triangles.insert(triangles.end(), triangles_.begin() + leaf_first_[l], triangles_.begin() + leaf_first_[l] + count);
-  }
-  leaf_cube_ = std::move(cubes);
-  leaf_case_ = std::move(cases);
-  leaf_first_ = std::move(first);
-  triangles_ = std::move(triangles);
+  // Leaves stay in the bricks' order (each cube is emitted by one brick):
+  // no decision below depends on it, and finish() orders the mesh.
   leaf_mask_.resize(leaf_cube_.size());
   leaf_alive_.assign(leaf_cube_.size(), 1);
   leaf_index_ = FlatHashMap(leaf_cube_.size());

@@ -86,7 +86,7 @@ class WeldedSurface {
   std::vector<Rgb> colors_;
   FlatHashMap grown_vertex_{64};  // lattice edge -> vertex, for vertices growth added
   std::size_t welded_vertices_ = 0;
-  // Leaves: sorted by cube after weld(); growth appends.
+  // Leaves: in the bricks' order; growth appends.
   std::vector<std::uint64_t> leaf_cube_;
   std::vector<std::uint8_t> leaf_case_;
   std::vector<std::uint16_t> leaf_mask_;  // kept case triangles
