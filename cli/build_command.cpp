@@ -12,7 +12,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 #include <map>
 #include <memory>
 
@@ -67,11 +66,7 @@ void add_build_command(CLI::App& app) {
     auto stage = clock::now();
     save_model(args->output, model);
     const double write_seconds = since(stage);
-    // A finished build needs its bricks no more.
-    if (report.in_bricks && args->flags.work_dir.empty()) {
-      std::error_code ec;
-      std::filesystem::remove_all(options.work_dir, ec);
-    }
+    args->flags.finished(report, options);
     const std::size_t points = report.points;
     const double read_seconds = report.seconds_read, reconstruct_seconds = report.seconds_reconstruct,
                  octree_seconds = report.seconds_octree, cluster_seconds = report.seconds_clusters;

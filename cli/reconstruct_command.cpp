@@ -10,7 +10,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 
 namespace scan2lod::cli {
@@ -56,11 +55,7 @@ void add_reconstruct_command(CLI::App& app) {
     write.quantize = !args->no_quantize;
     write.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
     write_mesh(args->output, r.mesh, write);
-    // The bricks of a finished reconstruction are needed no more.
-    if (report_bricks.in_bricks && args->flags.work_dir.empty()) {
-      std::error_code ec;
-      std::filesystem::remove_all(build.work_dir, ec);
-    }
+    args->flags.finished(report_bricks, build);
     const double write_seconds = std::chrono::duration<double>(clock::now() - write_start).count();
     const double seconds = std::chrono::duration<double>(clock::now() - start).count();
     if (args->json) {

@@ -5,6 +5,7 @@
 #include "core/error.h"
 
 #include <cstdio>
+#include <filesystem>
 
 namespace scan2lod::cli {
 
@@ -23,6 +24,12 @@ BuildOptions ReconstructFlags::build_options(const std::string& output) {
   b.brick_cubes = brick_cubes;
   if (brick_cubes > 0) b.strategy = BuildStrategy::kBricks;
   return b;
+}
+
+void ReconstructFlags::finished(const BuildReport& report, const BuildOptions& options) const {
+  if (!report.in_bricks || !work_dir.empty()) return;
+  std::error_code ec;
+  std::filesystem::remove_all(options.work_dir, ec);
 }
 
 void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {

@@ -27,6 +27,9 @@ struct ReconstructFlags {
   // The build options these flags give, for an output at `output` (the work
   // folder's default lies beside it).
   BuildOptions build_options(const std::string& output);
+  // Once the output is written: removes the work folder of a build in bricks
+  // when it was the default one (a folder the user named is kept).
+  void finished(const BuildReport& report, const BuildOptions& options) const;
 };
 
 // Adds -r/--resolution, --margin, --distance, --neighbours, --max-distance,

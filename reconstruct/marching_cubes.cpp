@@ -63,7 +63,7 @@ class SurfaceBuilder {
   // size the grid's arrays once rather than grow (and page-fault) them again.
   // region: the cubes this builder may add (a brick's own), or null for the
   // whole grid. Cubes outside it that the surface leads into are kept as
-  // requests (requests()) for the builder that owns them.
+  // requests for the builder that owns them (take_brick_surface).
   SurfaceBuilder(const OrientedPoints& points, const ReconstructOptions& options, double expected_cubes,
                  const CubeGrid& grid, const CubeRegion* region = nullptr, float far_bound = 0)
       : expected_cubes_(std::size_t(std::min(expected_cubes, 1e9))),
@@ -885,12 +885,12 @@ Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOption
   stats.points = points.size();
   Stopwatch watch;
   auto lap = [&watch] { return watch.lap(); };
-  make_cube_grid(bounds(points.positions), options.resolution);  // checks the resolution first
+  const CubeGrid grid = make_cube_grid(bounds(points.positions), options.resolution);  // checks the resolution first
   const ReconstructionEstimate estimate =
       check_resolution_fits(points, options.resolution, options.threads, options.memory_limit);
   const std::string advice = coarse_input_advice(points, options.resolution);
   if (!advice.empty()) result.warnings.push_back(advice);
-  SurfaceBuilder builder(points, options, estimate.cubes, make_cube_grid(bounds(points.positions), options.resolution));
+  SurfaceBuilder builder(points, options, estimate.cubes, grid);
   stats.seconds_index = lap();
   const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
   {
