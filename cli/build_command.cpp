@@ -25,6 +25,7 @@ void add_build_command(CLI::App& app) {
     bool verbose = false, json = false;
     LodMetric metric = LodMetric::kDeviation;
     std::string structure = "both";
+    std::int64_t cluster_block = 0;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
@@ -46,6 +47,10 @@ void add_build_command(CLI::App& app) {
                   "both. A mesh input's own triangles are the clusters' full detail.")
       ->check(CLI::IsMember({"clusters", "octree", "both"}, CLI::ignore_case))
       ->default_str("both");
+  cmd->add_option("--cluster-block", args->cluster_block,
+                  "Triangles per block of the cluster hierarchy; with it the hierarchy is always built in blocks "
+                  "(default: from --memory)")
+      ->check(CLI::Range(std::int64_t(1024), std::int64_t(1) << 40));
   cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each reconstruction stage");
   cmd->add_flag("--json", args->json, "Print the counts and stage times as JSON");
   cmd->callback([args] {
@@ -57,6 +62,7 @@ void add_build_command(CLI::App& app) {
     BuildOptions options = args->flags.build_options(args->output);
     options.octree = args->structure != "clusters";
     options.clusters = args->structure != "octree";
+    options.cluster_block = args->cluster_block;
     options.metric = args->metric;
     BuildReport report;
     LodModel model = build_model(args->inputs, options, &report);
@@ -86,6 +92,7 @@ void add_build_command(CLI::App& app) {
                        {"runs", report.bricks.brick_runs}, {"resumed", report.bricks.bricks_resumed},
                        {"follow_passes", report.bricks.follow_passes}, {"halo", report.plan.halo},
                        {"widest_halo", report.bricks.widest_halo}};
+      if (report.cluster_block > 0) j["cluster_block"] = report.cluster_block;
       const double mib = 1 << 20;
       j["memory_mib"] = {{"budget", report.budget_bytes / mib},
                          {"estimated", {{"in_core_reconstruction", report.estimated_bytes / mib},

@@ -27,7 +27,7 @@ BuildOptions ReconstructFlags::build_options(const std::string& output) {
 }
 
 void ReconstructFlags::finished(const BuildReport& report, const BuildOptions& options) const {
-  if (!report.in_bricks || !work_dir.empty()) return;
+  if ((!report.in_bricks && report.cluster_block == 0) || !work_dir.empty()) return;
   std::error_code ec;
   std::filesystem::remove_all(options.work_dir, ec);
 }

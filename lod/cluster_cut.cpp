@@ -3,6 +3,7 @@
 #include "lod/level_budget.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <cmath>
 #include <limits>
 
@@ -91,6 +92,9 @@ float error_for_budget(const ClusterCutTable& table, std::int64_t budget) {
 
 void emit_clusters(const ClusterHierarchy& h, const std::vector<std::int32_t>& selected,
                    std::vector<Triangle>* triangles) {
+  if (h.spool)
+    throw std::logic_error("emit_clusters: the hierarchy's triangles are spooled on disk; save the model, or "
+                           "load_spooled(), first");
   std::size_t total = triangles->size();
   for (std::int32_t c : selected) total += h.clusters[std::size_t(c)].triangle_count;
   triangles->reserve(total);

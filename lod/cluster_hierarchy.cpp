@@ -4,6 +4,7 @@
 #include "core/morton.h"
 #include "lod/cluster_partition.h"
 #include "lod/group_simplify.h"
+#include "lod/triangle_spool.h"
 
 #include <meshoptimizer.h>
 #include <parallel/algorithm>
@@ -16,11 +17,18 @@
 #include <thread>
 
 namespace scan2lod {
-
 int ClusterHierarchy::levels() const {
   int top = 0;
   for (const Cluster& c : clusters) top = std::max(top, int(c.level));
   return clusters.empty() ? 0 : top + 1;
+}
+
+std::uint64_t ClusterHierarchy::stored_triangles() const { return spool ? spool->size() : triangles.size(); }
+
+void ClusterHierarchy::load_spooled() {
+  if (!spool) return;
+  triangles = spool->load();
+  spool.reset();
 }
 
 namespace {
@@ -292,55 +300,61 @@ WeightedGraph cluster_graph(const ClusterHierarchy& h, const std::vector<std::in
   return g;
 }
 
-}  // namespace
-
-ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
-                                         ArrayView<Rgb> colors, const std::vector<Triangle>& triangles,
-                                         const ClusterOptions& options) {
-  if (triangles.empty()) throw InputError("", "the cluster hierarchy needs a mesh with triangles, got none");
-  for (const Triangle& t : triangles)
-    for (std::int32_t v : t)
-      if (v < 0 || std::size_t(v) >= positions.size())
-        throw InputError("", "a triangle names vertex " + std::to_string(v) + " of " +
-                                 std::to_string(positions.size()));
-  const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  const std::vector<std::int32_t> weld = weld_positions(positions);
-  const float diagonal = bounds(positions).diagonal();
-
-  ClusterHierarchy h;
-  h.full_triangles = std::int64_t(triangles.size());
-  std::vector<std::int32_t> active;
-  if (triangles.size() >= 2 * kSplitRun && threads > 1) {
-    append_clusters(split_large_mesh(positions, triangles, options.cluster_triangles, threads), -1, 0, &h, &active);
-  } else {
-    SplitGroup full;
-    full.simplified.triangles = triangles;
-    split_group(positions, options.cluster_triangles, &full);
-    append_clusters(full, -1, 0, &h, &active);
-  }
-  std::vector<Sphere> sphere(h.clusters.size());  // per cluster: what its parent must enclose
-  for (std::size_t c = 0; c < h.clusters.size(); ++c)
-    sphere[c] = points_sphere(positions, &h.triangles[h.clusters[c].first_triangle], h.clusters[c].triangle_count);
-
+// What every block of a build shares: the mesh and its per-vertex tables,
+// sized once.
+struct Shared {
+  ArrayView<Vec3f> positions;
+  const ClusterOptions* options = nullptr;
+  int threads = 1;
+  std::vector<std::int32_t> weld;
+  // 1: shared by two groups this round; 2: shared with another block this pass.
+  std::vector<std::uint8_t> locked;
+  std::vector<std::int32_t> vertex_group;
   SimplifyInput input;
-  input.positions = positions;
-  input.normals = normals;
-  input.colors = colors;
-  input.scale = diagonal > 0 ? 1.f / diagonal : 1.f;
-  input.normal_weight = options.normal_weight;
-  input.color_weight = options.color_weight;
-  std::vector<std::uint8_t> locked(positions.size(), 0);
-  input.locked = &locked;
-  std::vector<std::int32_t> vertex_group(positions.size(), -1);
-  const float error_floor = 1e-7f * std::max(diagonal, 1e-30f);
-  double simplified = 0, expected = 2.0 * double(triangles.size());
+  float error_floor = 0;
+  double simplified = 0, expected = 1;
+};
 
-  for (int round = 1; active.size() > 1 && round < 255; ++round) {
+// One block's clusters while its rounds run. Clusters [0, seeds) came in
+// from outside; their own_group is already the hierarchy's. Groups made here
+// are numbered from 0 until the block is written.
+struct Block {
+  ClusterHierarchy h;
+  std::vector<Sphere> sphere;    // what a parent must enclose
+  std::vector<float> own_error;  // of the group that made the cluster, 0 at full detail
+  std::size_t seeds = 0;
+  std::vector<std::int32_t> active;
+  int round = 1;                 // the next DAG round
+};
+
+// A cluster into `b` as a seed, from `from`'s cluster c.
+void add_seed(const Block& from, std::size_t c, Block* b) {
+  Cluster cl = from.h.clusters[c];
+  const std::uint32_t first = std::uint32_t(b->h.triangles.size());
+  b->h.triangles.insert(b->h.triangles.end(), from.h.triangles.begin() + cl.first_triangle,
+                        from.h.triangles.begin() + cl.first_triangle + cl.triangle_count);
+  cl.first_triangle = first;
+  b->active.push_back(std::int32_t(b->h.clusters.size()));
+  b->h.clusters.push_back(cl);
+  b->sphere.push_back(from.sphere[c]);
+  b->own_error.push_back(from.own_error[c]);
+  b->seeds = b->h.clusters.size();
+  b->round = std::max(b->round, int(cl.level) + 1);
+}
+
+// Phase 3: round after round, the block's active clusters grouped, each group
+// simplified to about half and cut into new clusters, until no group
+// simplifies or one cluster is left. Vertices locked at 2 stay locked.
+void run_rounds(Shared& s, Block* b, int rounds = 255) {
+  const ClusterOptions& options = *s.options;
+  ClusterHierarchy& h = b->h;
+  std::vector<std::int32_t>& active = b->active;
+  for (int done = 0; done < rounds && active.size() > 1 && b->round < 255; ++done, ++b->round) {
     // Phase 3a: groups of neighbouring clusters.
     int group_count = 1;
     std::vector<std::int32_t> group_of(active.size(), 0);
     if (active.size() > std::size_t(options.group_clusters))
-      group_of = partition_graph(cluster_graph(h, active, weld), options.group_clusters, &group_count);
+      group_of = partition_graph(cluster_graph(h, active, s.weld), options.group_clusters, &group_count);
     std::vector<std::vector<std::int32_t>> members;
     members.resize(std::size_t(group_count));
     for (std::size_t i = 0; i < active.size(); ++i) members[std::size_t(group_of[i])].push_back(active[i]);
@@ -352,38 +366,43 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
         const Cluster& cl = h.clusters[std::size_t(c)];
         for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t)
           for (std::int32_t v : h.triangles[t]) {
-            std::int32_t& owner = vertex_group[std::size_t(weld[std::size_t(v)])];
-            if (owner == -1) owner = std::int32_t(g), touched.push_back(weld[std::size_t(v)]);
-            else if (owner != std::int32_t(g)) locked[std::size_t(weld[std::size_t(v)])] = 1;
+            const std::size_t w = std::size_t(s.weld[std::size_t(v)]);
+            std::int32_t& owner = s.vertex_group[w];
+            if (owner == -1) owner = std::int32_t(g), touched.push_back(std::int32_t(w));
+            else if (owner != std::int32_t(g) && s.locked[w] == 0) s.locked[w] = 1;
           }
       }
 
     // Phase 3c: each group simplified to about half, on every core.
     std::vector<SplitGroup> result(members.size());
     std::vector<std::size_t> before(members.size(), 0);
-    on_threads(members.size(), threads, [&](std::size_t g) {
+    on_threads(members.size(), s.threads, [&](std::size_t g) {
       std::vector<Triangle> tris;
       for (std::int32_t c : members[g]) {
         const Cluster& cl = h.clusters[std::size_t(c)];
         for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t) {
           const Triangle& o = h.triangles[t];
-          tris.push_back({weld[std::size_t(o[0])], weld[std::size_t(o[1])], weld[std::size_t(o[2])]});
+          tris.push_back({s.weld[std::size_t(o[0])], s.weld[std::size_t(o[1])], s.weld[std::size_t(o[2])]});
         }
       }
       before[g] = tris.size();
-      result[g].simplified = simplify_group(tris, std::size_t(std::ceil(double(tris.size()) * options.reduction)), input);
+      result[g].simplified =
+          simplify_group(tris, std::size_t(std::ceil(double(tris.size()) * options.reduction)), s.input);
       const std::size_t kept = result[g].simplified.triangles.size();
       if (kept > 0 && double(kept) <= options.stall * double(tris.size()))
-        split_group(positions, options.cluster_triangles, &result[g]);
+        split_group(s.positions, options.cluster_triangles, &result[g]);
     });
-    for (std::int32_t v : touched) vertex_group[std::size_t(v)] = -1, locked[std::size_t(v)] = 0;
+    for (std::int32_t v : touched) {
+      s.vertex_group[std::size_t(v)] = -1;
+      if (s.locked[std::size_t(v)] == 1) s.locked[std::size_t(v)] = 0;
+    }
 
     // Phase 3d: groups that simplified become DAG nodes; their output becomes
     // clusters of the next round. The others' clusters wait for new neighbours.
     std::vector<std::int32_t> next;
     bool progress = false;
     for (std::size_t g = 0; g < members.size(); ++g) {
-      simplified += double(before[g]);
+      s.simplified += double(before[g]);
       const bool stalled = result[g].parts == 0;
       if (stalled) {
         next.insert(next.end(), members[g].begin(), members[g].end());
@@ -396,20 +415,274 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
       float below = 0;
       std::vector<Sphere> children;
       for (std::int32_t c : members[g]) {
-        Cluster& cl = h.clusters[std::size_t(c)];
-        cl.parent_group = group;
-        if (cl.own_group >= 0) below = std::max(below, h.groups[std::size_t(cl.own_group)].error);
-        children.push_back(sphere[std::size_t(c)]);
+        h.clusters[std::size_t(c)].parent_group = group;
+        below = std::max(below, b->own_error[std::size_t(c)]);
+        children.push_back(b->sphere[std::size_t(c)]);
       }
-      const float error = std::max(below + result[g].simplified.error, error_floor);
-      const Sphere s = enclosing_sphere(children);
-      h.groups.push_back({{s.center.x(), s.center.y(), s.center.z()}, s.radius, error});
-      append_clusters(result[g], group, std::uint8_t(round), &h, &next);
-      sphere.resize(h.clusters.size(), s);
+      const float error = std::max(below + result[g].simplified.error, s.error_floor);
+      const Sphere sphere = enclosing_sphere(children);
+      h.groups.push_back({{sphere.center.x(), sphere.center.y(), sphere.center.z()}, sphere.radius, error});
+      append_clusters(result[g], group, std::uint8_t(b->round), &h, &next);
+      b->sphere.resize(h.clusters.size(), sphere);
+      b->own_error.resize(h.clusters.size(), error);
     }
-    if (options.progress) options.progress(std::min(1.0, simplified / expected));
+    if (options.progress) options.progress(std::min(1.0, s.simplified / s.expected));
     active = std::move(next);
     if (!progress) break;
+  }
+}
+
+// Phase 4: a block's finished clusters (those with a parent, or all of them
+// when `last`) into `out`, its groups numbered on from out's; the others
+// become seeds of `carried`, to be grouped across the block's border in the
+// next pass.
+void write_block(Block& b, bool last, ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
+  const std::int32_t offset = std::int32_t(out->groups.size());
+  out->groups.insert(out->groups.end(), b.h.groups.begin(), b.h.groups.end());
+  auto global = [offset](std::int32_t local) { return local < 0 ? local : local + offset; };
+  for (std::size_t c = 0; c < b.h.clusters.size(); ++c) {
+    Cluster& cl = b.h.clusters[c];
+    if (c >= b.seeds) cl.own_group = global(cl.own_group);
+    cl.parent_group = global(cl.parent_group);
+    if (cl.parent_group < 0 && !last) {
+      add_seed(b, c, carried);
+      continue;
+    }
+    const Triangle* from = &b.h.triangles[cl.first_triangle];
+    if (spool) {
+      cl.first_triangle = std::uint32_t(spool->size());
+      spool->append(from, cl.triangle_count);
+    } else {
+      cl.first_triangle = std::uint32_t(out->triangles.size());
+      out->triangles.insert(out->triangles.end(), from, from + cl.triangle_count);
+    }
+    out->clusters.push_back(cl);
+  }
+  b = Block();
+}
+
+// Marks with 2 in s.locked the vertices that blocks share. `each(visit)`
+// calls visit(triangle, block) for every triangle of the pass; vertex_group
+// serves as each vertex's first block and is left at -1.
+template <class Each>
+void lock_block_borders(Shared& s, Each each) {
+  std::vector<std::int32_t> touched;
+  each([&](const Triangle& t, std::int32_t block) {
+    for (std::int32_t v : t) {
+      const std::size_t w = std::size_t(s.weld[std::size_t(v)]);
+      std::int32_t& first = s.vertex_group[w];
+      if (first == -1) first = block, touched.push_back(std::int32_t(w));
+      else if (first != block) s.locked[w] = 2;
+    }
+  });
+  for (std::int32_t v : touched) s.vertex_group[std::size_t(v)] = -1;
+}
+
+// Cuts `count` items in order into runs of at most `block` triangles
+// (tris(i) of the i-th; an item larger than a block is a run alone): the
+// starts of the runs, the end last.
+template <class Tris>
+std::vector<std::size_t> runs_of(std::size_t count, std::size_t block, Tris tris) {
+  std::vector<std::size_t> starts{0};
+  std::size_t run = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t n = tris(i);
+    if (run > 0 && run + n > block) starts.push_back(i), run = 0;
+    run += n;
+  }
+  starts.push_back(count);
+  return starts;
+}
+
+// Phase 1 of a blocked build: the triangles reordered in place into blocks
+// of at most `block`, by halving at the median centroid across the longest
+// side of each part's box, as a KD-tree does (Nexus cuts its first blocks
+// so): straight borders, the shortest a cut into boxes gives. (Runs of the
+// Morton curve had staircase borders, and cuts up to 1.4x the in-core
+// error at 20 k-50 k triangles of 3.3 M.) Returns the blocks' starts, the
+// end last.
+std::vector<std::size_t> kd_blocks(ArrayView<Vec3f> positions, std::vector<Triangle>* triangles, std::size_t block) {
+  auto centroid = [&](const Triangle& t) {
+    return positions[std::size_t(t[0])] + positions[std::size_t(t[1])] + positions[std::size_t(t[2])];
+  };
+  std::vector<std::size_t> starts;
+  std::vector<std::pair<std::size_t, std::size_t>> todo{{0, triangles->size()}};
+  while (!todo.empty()) {
+    const auto [begin, end] = todo.back();
+    todo.pop_back();
+    if (end - begin <= block) {
+      starts.push_back(begin);
+      continue;
+    }
+    Aabb box;
+    for (std::size_t i = begin; i < end; ++i) box.extend(centroid((*triangles)[i]));
+    int axis = 0;
+    box.extent().maxCoeff(&axis);
+    const std::size_t middle = begin + (end - begin) / 2;
+    std::nth_element(triangles->begin() + std::ptrdiff_t(begin), triangles->begin() + std::ptrdiff_t(middle),
+                     triangles->begin() + std::ptrdiff_t(end), [&](const Triangle& a, const Triangle& b) {
+                       return centroid(a)[axis] < centroid(b)[axis];
+                     });
+    todo.push_back({middle, end});
+    todo.push_back({begin, middle});
+  }
+  starts.push_back(triangles->size());
+  return starts;
+}
+
+// The blocked build, one DAG round a pass, as Ponchio's Nexus builds a level
+// at a time: each pass cuts the active clusters into blocks along the Morton
+// curve, runs one round in each block with the vertices it shares with other
+// blocks locked, and keeps what is left active for the next pass. The runs
+// start half a block later on every other pass, and the active set halves
+// from pass to pass, so a pass's block borders lie inside the next pass's
+// blocks and are simplified there. Once the active set fits one block, the
+// rounds run to the top in it. Pass 1 makes the full-detail clusters block
+// by block, from the triangles ordered by counting along the Morton curve of
+// their centroids (cells of 1/128 of the box).
+ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles) {
+  const ClusterOptions& options = *s.options;
+  std::size_t block = std::max<std::size_t>(std::size_t(options.block_triangles), 1024);
+  ClusterHierarchy out;
+  out.full_triangles = std::int64_t(triangles.size());
+  TriangleSpool* spool = options.spool.get();
+  // Each round keeps about half: the hierarchy holds about twice the full
+  // detail. Reserved, so that growth never doubles it.
+  if (!spool) out.triangles.reserve(std::size_t(2.1 * double(triangles.size())) + 4096);
+  Block carried;
+  int round = 1;
+  {
+    const std::vector<std::size_t> starts = kd_blocks(s.positions, &triangles, block);
+    const std::size_t blocks = starts.size() - 1;
+    lock_block_borders(s, [&](auto visit) {
+      for (std::size_t b = 0; b < blocks; ++b)
+        for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) visit(triangles[i], std::int32_t(b));
+    });
+    for (std::size_t b = 0; b < blocks; ++b) {
+      SplitGroup full;
+      full.simplified.triangles.assign(triangles.begin() + std::ptrdiff_t(starts[b]),
+                                       triangles.begin() + std::ptrdiff_t(starts[b + 1]));
+      split_group(s.positions, options.cluster_triangles, &full);
+      Block one;
+      append_clusters(full, -1, 0, &one.h, &one.active);
+      full = SplitGroup();
+      for (const Cluster& c : one.h.clusters)
+        one.sphere.push_back(points_sphere(s.positions, &one.h.triangles[c.first_triangle], c.triangle_count));
+      one.own_error.assign(one.h.clusters.size(), 0.f);
+      one.seeds = one.h.clusters.size();
+      one.round = round;
+      run_rounds(s, &one, 1);
+      write_block(one, false, &out, &carried, spool);
+    }
+    for (std::uint8_t& l : s.locked) l = 0;
+  }
+  triangles = std::vector<Triangle>();
+  for (std::size_t before = std::size_t(-1);;) {
+    ++round;
+    const std::size_t left = carried.h.triangles.size();
+
+    if (left <= block || carried.h.clusters.size() <= std::size_t(options.group_clusters) || round >= 254) {
+      carried.round = round;
+      run_rounds(s, &carried);
+      write_block(carried, true, &out, nullptr, spool);
+      out.spool = options.spool;
+      return out;
+    }
+    // A pass that simplified little had blocks too small for the groups
+    // its borders cut: the next one's are twice as large.
+    if (double(left) > 0.9 * double(before)) block *= 2;
+    before = left;
+    // Blocks by METIS over the cluster graph: it cuts where clusters share
+    // few vertices, which is inside the last pass's blocks (simplified)
+    // rather than along their borders (still at the detail they came in).
+    const std::size_t n = carried.h.clusters.size();
+    std::vector<std::int32_t> all(n);
+    std::iota(all.begin(), all.end(), 0);
+    int parts = 1;
+    const int per_block = int(std::max<std::size_t>(2, block * n / left));
+    const std::vector<std::int32_t> part = partition_graph(cluster_graph(carried.h, all, s.weld), per_block, &parts);
+    std::vector<std::size_t> starts(std::size_t(parts) + 1, 0);
+    for (std::int32_t p : part) ++starts[std::size_t(p) + 1];
+    for (std::size_t b = 0; b < std::size_t(parts); ++b) starts[b + 1] += starts[b];
+    std::vector<std::uint32_t> order(n);  // clusters block by block
+    {
+      std::vector<std::size_t> fill(starts.begin(), starts.end() - 1);
+      for (std::size_t c = 0; c < n; ++c) order[fill[std::size_t(part[c])]++] = std::uint32_t(c);
+    }
+    const std::size_t blocks = std::size_t(parts);
+    lock_block_borders(s, [&](auto visit) {
+      for (std::size_t b = 0; b < blocks; ++b)
+        for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) {
+          const Cluster& cl = carried.h.clusters[order[i]];
+          for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t)
+            visit(carried.h.triangles[t], std::int32_t(b));
+        }
+    });
+    Block next;
+    for (std::size_t b = 0; b < blocks; ++b) {
+      Block one;
+      for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) add_seed(carried, order[i], &one);
+      one.round = round;
+      run_rounds(s, &one, 1);
+      write_block(one, false, &out, &next, spool);
+    }
+    carried = std::move(next);
+    for (std::uint8_t& l : s.locked) l = 0;
+  }
+}
+
+}  // namespace
+
+ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
+                                         ArrayView<Rgb> colors, std::vector<Triangle> triangles,
+                                         const ClusterOptions& options) {
+  if (triangles.empty()) throw InputError("", "the cluster hierarchy needs a mesh with triangles, got none");
+  for (const Triangle& t : triangles)
+    for (std::int32_t v : t)
+      if (v < 0 || std::size_t(v) >= positions.size())
+        throw InputError("", "a triangle names vertex " + std::to_string(v) + " of " +
+                                 std::to_string(positions.size()));
+  Shared s;
+  s.positions = positions;
+  s.options = &options;
+  s.threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  s.weld = weld_positions(positions);
+  const float diagonal = bounds(positions).diagonal();
+  s.input.positions = positions;
+  s.input.normals = normals;
+  s.input.colors = colors;
+  s.input.scale = diagonal > 0 ? 1.f / diagonal : 1.f;
+  s.input.normal_weight = options.normal_weight;
+  s.input.color_weight = options.color_weight;
+  s.locked.assign(positions.size(), 0);
+  s.input.locked = &s.locked;
+  s.vertex_group.assign(positions.size(), -1);
+  s.error_floor = 1e-7f * std::max(diagonal, 1e-30f);
+  s.expected = 2.0 * double(triangles.size());
+
+  ClusterHierarchy h;
+  if (options.block_triangles > 0 && triangles.size() > std::size_t(options.block_triangles)) {
+    h = build_in_blocks(s, std::move(triangles));
+  } else {
+    // In core: the whole mesh is one block.
+    Block all;
+    all.h.full_triangles = std::int64_t(triangles.size());
+    if (triangles.size() >= 2 * kSplitRun && s.threads > 1) {
+      append_clusters(split_large_mesh(positions, triangles, options.cluster_triangles, s.threads), -1, 0, &all.h,
+                      &all.active);
+    } else {
+      SplitGroup full;
+      full.simplified.triangles = std::move(triangles);
+      split_group(positions, options.cluster_triangles, &full);
+      append_clusters(full, -1, 0, &all.h, &all.active);
+    }
+    triangles = std::vector<Triangle>();
+    for (const Cluster& c : all.h.clusters)
+      all.sphere.push_back(points_sphere(positions, &all.h.triangles[c.first_triangle], c.triangle_count));
+    all.own_error.assign(all.h.clusters.size(), 0.f);
+    all.seeds = all.h.clusters.size();
+    run_rounds(s, &all);
+    h = std::move(all.h);
   }
   if (options.progress) options.progress(1.0);
   return h;

@@ -23,9 +23,12 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 namespace scan2lod {
+
+class TriangleSpool;
 
 // A bounding sphere and the object-space error of the simplification that
 // made a group (Hausdorff-like: the largest quadric distance of its
@@ -46,13 +49,19 @@ struct Cluster {
 };
 
 struct ClusterHierarchy {
-  std::vector<Cluster> clusters;      // level by level, full detail first
+  std::vector<Cluster> clusters;      // as finished: level by level in core, block by block in blocks
   std::vector<Triangle> triangles;    // every cluster's, into the model's shared vertices
   std::vector<GroupBound> groups;     // errors and bounds of the simplified groups
   std::int64_t full_triangles = 0;    // triangles of the full-detail cut
+  // Set by a build in blocks with a spool: `triangles` is empty and the
+  // clusters index the spool's triangles instead, on disk until the model
+  // is written (lod/triangle_spool.h). load_spooled() brings them in.
+  std::shared_ptr<TriangleSpool> spool;
 
   std::size_t size() const { return clusters.size(); }
   int levels() const;                 // DAG rounds, 1 for a hierarchy of one level
+  std::uint64_t stored_triangles() const;  // in memory or spooled
+  void load_spooled();                // the spool's triangles into `triangles`
 };
 
 struct ClusterOptions {
@@ -71,6 +80,15 @@ struct ClusterOptions {
   float normal_weight = 0.0005f;
   float color_weight = 0.002f;
   int threads = 0;               // 0: every core
+  // Above 0, a mesh of more triangles is built in blocks of about this many,
+  // so that the build's working memory is a block's, not the mesh's: each
+  // block simplified with the vertices it shares with other blocks locked,
+  // then what is left regrouped across those borders, pass after pass.
+  // 0: the whole mesh at once.
+  std::int64_t block_triangles = 0;
+  // With block_triangles: finished clusters' triangles go here as each block
+  // ends, not to memory (ClusterHierarchy::spool).
+  std::shared_ptr<TriangleSpool> spool;
   // Called with the share of the triangles simplified so far (0 to 1); may be empty.
   std::function<void(double)> progress;
 };
@@ -82,7 +100,7 @@ struct ClusterOptions {
 // simplification only ever keeps existing vertices (half-edge collapse), so
 // the hierarchy adds none. Throws InputError when there are no triangles.
 ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
-                                         ArrayView<Rgb> colors, const std::vector<Triangle>& triangles,
+                                         ArrayView<Rgb> colors, std::vector<Triangle> triangles,
                                          const ClusterOptions& options = {});
 
 }  // namespace scan2lod

@@ -42,11 +42,27 @@ LodModel model_from_octree(McOctree tree, LodArray lod) {
   return model;
 }
 
-void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool shares_vertices,
-                           const ClusterOptions& options) {
+void add_cluster_hierarchy(LodModel* model, TriangleMesh&& mesh, bool shares_vertices, const ClusterOptions& options) {
   VertexArray& v = model->vertices;
   std::size_t first = 0;
-  if (!shares_vertices) {
+  const std::size_t count = mesh.positions.size();
+  if (shares_vertices) {
+    model->clusters = build_cluster_hierarchy(v.positions, v.normals, v.colors, std::move(mesh.triangles), options);
+    model->cluster_vertex_first = 0;
+    model->cluster_vertex_count = count;
+    return;
+  }
+  if (v.positions.empty()) {
+    // The mesh's vertices become the model's, each array freed once copied
+    // (the model's arrays have their own allocator).
+    auto take = [](auto& to, auto& from) {
+      to.assign(from.begin(), from.end());
+      from = {};
+    };
+    take(v.positions, mesh.positions);
+    take(v.normals, mesh.normals);
+    take(v.colors, mesh.colors);
+  } else {
     first = v.size();
     // An attribute present on one side only is filled on the other, so that
     // the arrays stay one per position.
@@ -64,12 +80,24 @@ void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool share
       else v.colors.insert(v.colors.end(), mesh.colors.begin(), mesh.colors.end());
     }
   }
-  std::vector<Triangle> triangles = mesh.triangles;
-  for (Triangle& t : triangles)
-    for (std::int32_t& i : t) i += std::int32_t(first);
-  model->clusters = build_cluster_hierarchy(v.positions, v.normals, v.colors, triangles, options);
+  if (first > 0)
+    for (Triangle& t : mesh.triangles)
+      for (std::int32_t& i : t) i += std::int32_t(first);
+  model->clusters = build_cluster_hierarchy(v.positions, v.normals, v.colors, std::move(mesh.triangles), options);
   model->cluster_vertex_first = first;
-  model->cluster_vertex_count = mesh.positions.size();
+  model->cluster_vertex_count = count;
+}
+
+void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool shares_vertices,
+                           const ClusterOptions& options) {
+  if (shares_vertices) {
+    model->clusters = build_cluster_hierarchy(model->vertices.positions, model->vertices.normals,
+                                              model->vertices.colors, mesh.triangles, options);
+    model->cluster_vertex_first = 0;
+    model->cluster_vertex_count = mesh.positions.size();
+    return;
+  }
+  add_cluster_hierarchy(model, TriangleMesh(mesh), false, options);
 }
 
 static LevelRequest request_of(LevelRequest::Kind kind) {
@@ -268,7 +296,7 @@ ClusterSummary describe_clusters(const LodModel& model) {
   ClusterSummary s;
   s.clusters = h.size();
   s.groups = h.groups.size();
-  s.stored_triangles = h.triangles.size();
+  s.stored_triangles = h.stored_triangles();
   s.levels = h.levels();
   s.full_triangles = h.full_triangles;
   s.coarsest_triangles = LevelExtractor(model, LodStructure::kClusters).coarsest_triangles();

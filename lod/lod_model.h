@@ -69,6 +69,9 @@ LodModel model_from_octree(McOctree tree, LodArray lod);
 // are appended. Without vertices yet, the mesh's become the model's.
 void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool shares_vertices,
                            const ClusterOptions& options = {});
+// The same, taking the mesh's arrays instead of copying them.
+void add_cluster_hierarchy(LodModel* model, TriangleMesh&& mesh, bool shares_vertices,
+                           const ClusterOptions& options = {});
 
 // What a level is asked for by. Exactly one of them.
 struct LevelRequest {

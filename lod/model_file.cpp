@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "lod/model_pack.h"
+#include "lod/triangle_spool.h"
 #include "lod/transition.h"
 #include "reconstruct/cube_table.h"
 
@@ -22,6 +23,7 @@
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <unistd.h>
+#include <xxhash.h>
 
 namespace scan2lod {
 
@@ -75,13 +77,6 @@ std::uint64_t get_u64(const std::uint8_t* p) {
   return v;
 }
 
-std::uint64_t rotl(std::uint64_t x, int r) { return (x << r) | (x >> (64 - r)); }
-
-constexpr std::uint64_t kP1 = 0x9E3779B185EBCA87ull, kP2 = 0xC2B2AE3D27D4EB4Full, kP3 = 0x165667B19E3779F9ull,
-                        kP4 = 0x85EBCA77C2B2AE63ull, kP5 = 0x27D4EB2F165667C5ull;
-
-std::uint64_t xxh_round(std::uint64_t acc, std::uint64_t input) { return rotl(acc + input * kP2, 31) * kP1; }
-std::uint64_t xxh_merge(std::uint64_t acc, std::uint64_t v) { return (acc ^ xxh_round(0, v)) * kP1 + kP4; }
 
 // What the sections hold besides the model's arrays as they lie in memory:
 // the records (the grid, the pinned count, the cluster hierarchy's info) and,
@@ -221,6 +216,7 @@ struct OutSection {
   std::uint64_t count;
   const void* data;
   std::uint32_t flags = kRequired;
+  const TriangleSpool* spool = nullptr;  // the payload, when on disk
 };
 
 // One directory entry as read.
@@ -240,38 +236,16 @@ std::string lower_extension(const std::string& path) {
 }  // namespace
 
 std::uint64_t model_checksum(const void* data, std::size_t size, std::uint64_t seed) {
-  const auto* p = static_cast<const std::uint8_t*>(data);
-  const std::uint8_t* const end = p + size;
-  std::uint64_t h;
-  if (size >= 32) {
-    std::uint64_t v1 = seed + kP1 + kP2, v2 = seed + kP2, v3 = seed, v4 = seed - kP1;
-    for (const std::uint8_t* limit = end - 32; p <= limit; p += 32) {
-      v1 = xxh_round(v1, get_u64(p));
-      v2 = xxh_round(v2, get_u64(p + 8));
-      v3 = xxh_round(v3, get_u64(p + 16));
-      v4 = xxh_round(v4, get_u64(p + 24));
-    }
-    h = rotl(v1, 1) + rotl(v2, 7) + rotl(v3, 12) + rotl(v4, 18);
-    h = xxh_merge(xxh_merge(xxh_merge(xxh_merge(h, v1), v2), v3), v4);
-  } else {
-    h = seed + kP5;
-  }
-  h += std::uint64_t(size);
-  for (; p + 8 <= end; p += 8) h = rotl(h ^ xxh_round(0, get_u64(p)), 27) * kP1 + kP4;
-  if (p + 4 <= end) {
-    h = rotl(h ^ std::uint64_t(get_u32(p)) * kP1, 23) * kP2 + kP3;
-    p += 4;
-  }
-  for (; p < end; ++p) h = rotl(h ^ std::uint64_t(*p) * kP5, 11) * kP1;
-  h ^= h >> 33;
-  h *= kP2;
-  h ^= h >> 29;
-  h *= kP3;
-  h ^= h >> 32;
-  return h;
+  return XXH64(data, size, seed);
 }
 
-std::vector<std::uint8_t> encode_model(const LodModel& model, std::uint32_t major) {
+namespace {
+
+// The file's bytes in order, to `out` (called with runs of bytes), with the
+// trailer's checksum taken as they pass: a model is written without a copy
+// of it in memory.
+void emit_model(const LodModel& model, std::uint32_t major,
+                const std::function<void(const std::uint8_t*, std::size_t)>& out) {
   if (major < kUnpacked || major > kModelFormatMajor)
     throw std::invalid_argument("encode_model: format " + std::to_string(major) + " is not written");
   Records records = records_of(model, major);
@@ -282,6 +256,11 @@ std::vector<std::uint8_t> encode_model(const LodModel& model, std::uint32_t majo
     if (!has_part(model, spec.part) || !spec.in(major)) continue;
     const Payload p = spec.payload(readable, records);
     sections.push_back({fourcc(spec.tag), p.element_size, p.count, p.data, spec.required ? kRequired : 0});
+    // A hierarchy built in blocks may hold its triangles on disk.
+    if (sections.back().tag == fourcc("CTRI") && model.clusters->spool) {
+      sections.back().spool = model.clusters->spool.get();
+      sections.back().count = model.clusters->spool->size();
+    }
   }
   const std::size_t count = sections.size();
   const std::uint64_t directory_end = kHeaderBytes + kEntryBytes * count + 8;
@@ -289,8 +268,8 @@ std::vector<std::uint8_t> encode_model(const LodModel& model, std::uint32_t majo
   for (const OutSection& s : sections) length = padded(length + s.element_size * s.count);
   length += 8;
 
-  std::vector<std::uint8_t> bytes(length, 0);
-  std::uint8_t* header = bytes.data();
+  std::vector<std::uint8_t> head(directory_end, 0);
+  std::uint8_t* header = head.data();
   std::memcpy(header, kMagic, 8);
   put_u32(header + 8, major);
   put_u32(header + 12, major == kModelFormatMajor ? kModelFormatMinor : 0);
@@ -302,8 +281,7 @@ std::vector<std::uint8_t> encode_model(const LodModel& model, std::uint32_t majo
   for (std::size_t i = 0; i < count; ++i) {
     const OutSection& s = sections[i];
     const std::uint64_t size = s.element_size * s.count;
-    if (size) std::memcpy(bytes.data() + offset, s.data, size);
-    std::uint8_t* e = bytes.data() + kHeaderBytes + kEntryBytes * i;
+    std::uint8_t* e = head.data() + kHeaderBytes + kEntryBytes * i;
     put_u32(e, s.tag);
     put_u32(e + 4, s.flags);
     put_u32(e + 8, s.element_size);
@@ -311,11 +289,39 @@ std::vector<std::uint8_t> encode_model(const LodModel& model, std::uint32_t majo
     put_u64(e + 16, s.count);
     put_u64(e + 24, offset);
     put_u64(e + 32, size);
-    put_u64(e + 40, model_checksum(bytes.data() + offset, size));
+    put_u64(e + 40, s.spool ? s.spool->checksum() : model_checksum(s.data, size));
     offset = padded(offset + size);
   }
-  put_u64(bytes.data() + directory_end - 8, model_checksum(bytes.data() + kHeaderBytes, kEntryBytes * count));
-  put_u64(bytes.data() + length - 8, model_checksum(bytes.data(), length - 8));
+  put_u64(head.data() + directory_end - 8, model_checksum(head.data() + kHeaderBytes, kEntryBytes * count));
+
+  std::unique_ptr<XXH64_state_t, XXH_errorcode (*)(XXH64_state_t*)> file(XXH64_createState(), XXH64_freeState);
+  if (!file) throw std::bad_alloc();
+  XXH64_reset(file.get(), 0);
+  auto emit = [&](const std::uint8_t* bytes, std::size_t size) {
+    if (size == 0) return;
+    XXH64_update(file.get(), bytes, size);
+    out(bytes, size);
+  };
+  emit(head.data(), head.size());
+  static const std::uint8_t zeros[8] = {};
+  offset = directory_end;
+  for (const OutSection& s : sections) {
+    const std::uint64_t size = s.element_size * s.count;
+    if (s.spool) s.spool->read(emit);
+    else emit(static_cast<const std::uint8_t*>(s.data), size);
+    emit(zeros, padded(offset + size) - (offset + size));
+    offset = padded(offset + size);
+  }
+  std::uint8_t trailer[8];
+  put_u64(trailer, XXH64_digest(file.get()));
+  out(trailer, 8);
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_model(const LodModel& model, std::uint32_t major) {
+  std::vector<std::uint8_t> bytes;
+  emit_model(model, major, [&](const std::uint8_t* p, std::size_t n) { bytes.insert(bytes.end(), p, p + n); });
   return bytes;
 }
 
@@ -330,12 +336,19 @@ void check_model_output(const std::string& path) {
 
 void save_model(const std::string& path, const LodModel& model) {
   check_model_output(path);
-  const std::vector<std::uint8_t> bytes = encode_model(model);
   write_atomically(path, [&](const std::string& tmp) {
     FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) throw InputError(path, std::string("cannot write: ") + std::strerror(errno));
-    const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-    const int error = errno;
+    bool written = true;
+    int error = 0;
+    try {
+      emit_model(model, kModelFormatMajor, [&](const std::uint8_t* p, std::size_t n) {
+        if (written && std::fwrite(p, 1, n, f) != n) written = false, error = errno;
+      });
+    } catch (...) {
+      std::fclose(f);
+      throw;
+    }
     if (std::fclose(f) != 0 || !written)
       throw InputError(path, std::string("cannot write: ") + std::strerror(written ? errno : error));
   });

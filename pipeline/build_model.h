@@ -31,6 +31,9 @@ struct BuildOptions {
   BuildStrategy strategy = BuildStrategy::kAutomatic;
   std::string work_dir;  // where bricks are kept; required when the build runs in bricks
   int brick_cubes = 0;   // cubes per brick side; 0: from the memory budget
+  // Triangles per block of the cluster hierarchy (ClusterOptions::
+  // block_triangles); 0: in blocks only when the budget needs them, sized from it.
+  std::int64_t cluster_block = 0;
 };
 
 struct BuildReport {
@@ -46,6 +49,7 @@ struct BuildReport {
   std::vector<std::string> warnings;
   // Memory: estimated before each stage, and the process's peak measured after it.
   double estimated_cluster_bytes = 0;
+  std::int64_t cluster_block = 0;  // triangles per block of the hierarchy; 0: built in core
   double peak_bytes_reconstruct = 0, peak_bytes_octree = 0, peak_bytes_clusters = 0;
   std::size_t full_triangles = 0;  // the reconstruction's (or the mesh input's)
   // Wall-clock seconds per stage; the octree's build is seconds_octree, of

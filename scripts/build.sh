@@ -18,7 +18,7 @@ packages=(
   libeigen3-dev liblz4-dev
   libpcl-dev libopen3d-dev libopenmesh-dev libflann-dev libvtk9-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
-  libmeshoptimizer-dev libmetis-dev libtinygltf-dev
+  libmeshoptimizer-dev libmetis-dev libtinygltf-dev libxxhash-dev
   xvfb xauth libgl1-mesa-dri
 )
 
