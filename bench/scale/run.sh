@@ -7,11 +7,17 @@
 # bricks / in core is taken within one run, since these machines vary by up to
 # 2x from one hour to the next. Builds nothing.
 #
-#   bench/scale/run.sh [--build DIR] [--write] [--sizes "V:S:R ..."] [--memory 400M] [--shared DIR]
+# Each row also gives the brick build's cut errors against the in-core
+# build's at 10 k and 50 k triangles: the two-sided mean distance of each
+# cut to the in-core full detail, bricks over core.
 #
-#   --sizes   views:size:resolution per row (default "16:480:1024 32:680:2048":
-#             about 1 M and 4 M points; points per cube held about even, so
-#             that the surface's triangles grow with the points)
+#   bench/scale/run.sh [--build DIR] [--write] [--sizes "M:V:S:R ..."] [--memory 400M] [--shared DIR]
+#
+#   --sizes   mesh:views:size:resolution per row, mesh "bunny" (bun_zipper.ply)
+#             or "pair" (two bunnies side by side: a long scan set, like the
+#             Happy Buddha's, whose R = 1024 surface has about 3.3 M triangles
+#             from 1 M points); default "pair:16:560:1024 bunny:16:480:1024
+#             bunny:32:680:2048": about 1, 1 and 4 M points
 #   --memory  the budget of the brick builds (default 400M)
 #   --write   also write bench/scale/REPORT.md
 set -euo pipefail
@@ -21,7 +27,7 @@ repo="$(dirname "$(dirname "$here")")"
 source "$repo/bench/common.sh"
 build="${SCAN2LOD_BUILD_DIR:-$repo/build}"
 command="bench/scale/run.sh $*"
-write=0 sizes="16:480:1024 32:680:2048" memory=400M shared="$repo/../shared"
+write=0 sizes="pair:16:560:1024 bunny:16:480:1024 bunny:32:680:2048" memory=400M shared="$repo/../shared"
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
@@ -45,20 +51,55 @@ run() {
     > "$work/$name.json"
 }
 
+# Two copies of the bunny side by side, 1.1 widths apart.
+python3 - "$mesh" "$work/pair.ply" <<'EOF'
+import sys
+lines = open(sys.argv[1]).read().split("\n")
+end = lines.index("end_header")
+nv = int(next(l for l in lines if l.startswith("element vertex")).split()[2])
+nf = int(next(l for l in lines if l.startswith("element face")).split()[2])
+v = [l.split()[:3] for l in lines[end + 1:end + 1 + nv]]
+f = [l.split()[1:4] for l in lines[end + 1 + nv:end + 1 + nv + nf]]
+xs = [float(p[0]) for p in v]
+shift = 1.1 * (max(xs) - min(xs))
+with open(sys.argv[2], "w") as out:
+    out.write("ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\n"
+              "element face %d\nproperty list uchar int vertex_indices\nend_header\n" % (2 * nv, 2 * nf))
+    for k in range(2):
+        for p in v: out.write("%.9g %s %s\n" % (float(p[0]) + k * shift, p[1], p[2]))
+    for k in range(2):
+        for t in f: out.write("3 %d %d %d\n" % tuple(int(i) + k * nv for i in t))
+EOF
+
+# cut_ratio TRIANGLES: the brick build's cut error over the in-core one's
+cut_ratio() {
+  local t="$1" e=()
+  for m in core bricks; do
+    "$binary" extract "$work/$m.mco" --triangles "$t" -o "$work/cut.ply" --quiet
+    e+=("$("$binary" compare "$work/cut.ply" "$work/full.ply" --json --samples 200000 |
+           python3 -c 'import json,sys; j=json.load(sys.stdin); print((j["a_to_b"]["mean"]+j["b_to_a"]["mean"])/2)')")
+  done
+  python3 -c "print('%.2f' % (${e[1]} / ${e[0]}))"
+}
+
 rows=()
 for size in $sizes; do
-  IFS=: read -r views pixels resolution <<< "$size"
+  IFS=: read -r shape views pixels resolution <<< "$size"
   scans="$work/scans_$views"
   mkdir -p "$scans"
-  "$binary" scan "$mesh" -o "$scans" --views "$views" --size "${pixels}x${pixels}" --quiet
+  source_mesh="$mesh"
+  [[ "$shape" == pair ]] && source_mesh="$work/pair.ply"
+  "$binary" scan "$source_mesh" -o "$scans" --views "$views" --size "${pixels}x${pixels}" --quiet
   echo "scale: $views views of ${pixels}^2 at R = $resolution: in core" >&2
   run core "$scans/scans.conf" -r "$resolution" -o "$work/core.mco"
   echo "scale: ... in bricks (--memory $memory)" >&2
   run bricks "$scans/scans.conf" -r "$resolution" -o "$work/bricks.mco" --memory "$memory" --work-dir "$work/w"
   disk=$(du -sb "$work/w" | cut -f1)
-  rows+=("$(python3 - "$work" "$disk" "$resolution" <<'EOF'
+  "$binary" extract "$work/core.mco" --percent 100 -o "$work/full.ply" --quiet
+  cuts="$(cut_ratio 10000) / $(cut_ratio 50000)"
+  rows+=("$(python3 - "$work" "$disk" "$resolution" "$shape" "$cuts" <<'EOF'
 import json, sys
-work, disk, R = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+work, disk, R, shape, cuts = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5]
 def load(name):
     j = json.load(open(f"{work}/{name}.json"))
     wall, kb = open(f"{work}/{name}.time").read().split()
@@ -69,13 +110,14 @@ p = c["points"]
 tri = c["clusters"]["full_triangles"]
 cs, bs = c["seconds"], b["seconds"]
 br = b.get("bricks", {})
-print(f"| {p/1e6:.2f} M | {R} | {tri/1e6:.2f} M | {b['clusters']['full_triangles'] == tri} "
+print(f"| {shape} | {p/1e6:.2f} M | {R} | {tri/1e6:.2f} M | {b['clusters']['full_triangles'] == tri} "
       f"| {cw:.1f} / {cm:.0f} | {bw:.1f} / {bm:.0f} | {br.get('bricks', '-')} of {br.get('brick_cubes', '-')} "
+      f"| {b.get('cluster_block', 0)/1e3:.0f} k | {cuts} "
       f"| {disk/2**20:.0f} | {cs['reconstruct']:.1f} / {bs['reconstruct']:.1f} | {cs['clusters']:.1f} / {bs['clusters']:.1f} "
       f"| {p/cw/1e3:.0f} k / {p/bw/1e3:.0f} k | {bw/cw:.2f} | {tri/bs['clusters']/2e3:.0f} k |")
 EOF
 )")
-  rm -rf "$work/w" "$scans" "$work"/*.mco
+  rm -rf "$work/w" "$scans" "$work"/*.mco "$work"/cut.ply "$work"/full.ply
 done
 
 {
@@ -86,15 +128,17 @@ done
   echo "OpenMP: \`OMP_WAIT_POLICY=$OMP_WAIT_POLICY\`  "
   echo "Source: $(git -C "$repo" rev-parse --short HEAD) (at run time)"
   echo
-  echo "Inputs: \`scan2lod scan\` of \`bun_zipper.ply\` (views × size² range images), built with"
+  echo "Inputs: \`scan2lod scan\` (views × size² range images) of \`bun_zipper.ply\` or of two copies side by side (*pair*), built with"
   echo "\`scan2lod build SCANS.conf -r R --structure clusters --json\`, in core and with \`--memory $memory\`."
   echo "Wall time and peak RSS from \`/usr/bin/time\`; disk: the work folder's bricks at the end."
   echo "*same*: the brick build's full detail has the in-core triangle count (the tests check the triangles"
   echo "themselves). Throughput: input points per second of the whole build. *clusters/core*: triangles"
-  echo "per second per core of the cluster stage (2 cores)."
+  echo "per second per core of the cluster stage (2 cores). *blocks*: triangles per block of the cluster"
+  echo "hierarchy in the brick build (0: in core). *cuts*: the brick build's cut error over the in-core"
+  echo "build's at 10 k / 50 k triangles (two-sided mean distance to the in-core full detail, 200 k samples)."
   echo
-  echo "| points | R | triangles | same | in core: s / MiB | bricks: s / MiB | bricks of cubes | disk MiB | reconstruct s (core / bricks) | clusters s (core / bricks) | points/s (core / bricks) | bricks ÷ core time | clusters/core |"
-  echo "|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
+  echo "| scans of | points | R | triangles | same | in core: s / MiB | bricks: s / MiB | bricks of cubes | blocks | cuts 10 k / 50 k | disk MiB | reconstruct s (core / bricks) | clusters s (core / bricks) | points/s (core / bricks) | bricks ÷ core time | clusters/core |"
+  echo "|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
   for row in "${rows[@]}"; do echo "$row"; done
 } > "$work/report.md"
 cat "$work/report.md"
