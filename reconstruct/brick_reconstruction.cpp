@@ -469,6 +469,8 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
   // brick whose halo holds points runs; else the bricks that hold points.
   struct State {
     std::vector<std::uint64_t> wanted, followed, requests, border;
+    std::size_t vertices = 0, leaves = 0, triangles = 0;  // of its share, for the weld's room
+    bool colored = false;
     bool pending = false, done = false;
   };
   std::map<std::uint32_t, State> bricks;
@@ -510,6 +512,10 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
         }, &bs.widest_halo);
         write_brick(path, plan.key, file);
       }
+      state.vertices = file.surface.vertex_edges.size();
+      state.leaves = file.surface.leaf_cubes.size();
+      state.triangles = file.surface.triangles.size();
+      state.colored = !file.surface.colors.empty();
       state.followed = std::move(file.followed);
       state.requests = std::move(file.surface.requests);
       state.border = std::move(file.surface.border_cubes);
@@ -536,6 +542,13 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
 
   // Phase 4: the bricks welded by lattice edge, and cleaned up as in core.
   WeldedSurface surface(plan.grid);
+  {
+    std::size_t vertices = 0, leaves = 0, triangles = 0;
+    bool colored = false;
+    for (const auto& [brick, state] : bricks)
+      vertices += state.vertices, leaves += state.leaves, triangles += state.triangles, colored |= state.colored;
+    surface.reserve(vertices, leaves, triangles, colored);
+  }
   for (const auto& [brick, state] : bricks) {
     BrickFile file;
     if (!read_brick(brick_path(dir, brick), plan.key, &file))

@@ -29,6 +29,9 @@ class WeldedSurface {
  public:
   explicit WeldedSurface(const CubeGrid& grid) : grid_(grid), h_(float(grid.cube_size)) {}
 
+  // Room for the bricks' shares, counted before they are added: growth by
+  // doubling held up to twice the surface.
+  void reserve(std::size_t vertices, std::size_t leaves, std::size_t triangles, bool colored);
   // Phase 1: one brick's share. Vertices on shared brick faces come from
   // both; they are one vertex after weld().
   void add_vertices(const std::vector<std::uint64_t>& edges, const std::vector<Vec3f>& positions,
