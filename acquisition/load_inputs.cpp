@@ -140,16 +140,20 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
   // One file alone gets every core for its own parallel work (normal estimation).
   std::vector<OrientedPoints> parts(jobs.size());
   std::vector<std::uint8_t> estimated(jobs.size(), 0);
+  std::vector<std::vector<std::string>> warnings(jobs.size());
   auto read_job = [&](std::size_t i, int threads) {
     const Job& job = jobs[i];
     if (job.kind == Kind::range_grid) {
-      parts[i] = range_image_to_points(read_range_grid_ply(job.file), job.pose, options.lattice);
+      const RangeImage image = read_range_grid_ply(job.file);
+      warnings[i] = image.warnings;
+      parts[i] = range_image_to_points(image, job.pose, options.lattice);
     } else if (job.kind == Kind::pcd) {
       ScanPose pose;
       RangeImage image = read_organized_pcd(job.file, &pose);
       parts[i] = range_image_to_points(image, pose, options.lattice);
     } else if (job.kind == Kind::cloud) {
       const PointCloud cloud = read_point_cloud(job.file);
+      warnings[i] = cloud.warnings;
       estimated[i] = cloud.normals.empty();
       CloudNormalOptions cloud_options = options.cloud;
       cloud_options.threads = threads;
@@ -185,6 +189,7 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
     if (jobs[i].kind == Kind::cloud) ++local.clouds, local.clouds_estimated += estimated[i];
     else (jobs[i].kind == Kind::mesh ? local.meshes : local.range_images)++;
     local.files.push_back(jobs[i].file);
+    local.warnings.insert(local.warnings.end(), warnings[i].begin(), warnings[i].end());
   }
   if (report) *report = std::move(local);
   return points;

@@ -28,6 +28,7 @@ struct AcquisitionReport {
   std::size_t clouds = 0;             // point clouds
   std::size_t clouds_estimated = 0;   // of those, the ones whose normals were estimated
   std::vector<std::string> files;  // every file read, in order
+  std::vector<std::string> warnings;  // what the readers skipped, file by file
 };
 
 // @param[in] inputs  paths; the kind is told by extension and, for .ply, by header

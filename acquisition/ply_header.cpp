@@ -74,10 +74,19 @@ PlyHeader read_ply_header(const std::string& path, std::istream& in) {
     } else if (key == "end_header") {
       return h;
     } else if (key != "comment" && !key.empty()) {
-      fail_at(path, line, "unknown keyword '" + shown_line(key) + "'");
+      h.ignored.push_back(line);
     }
   }
   throw InputError(path, "PLY header ends before 'end_header'");
+}
+
+std::string ignored_lines_warning(const std::string& path, const PlyHeader& header) {
+  if (header.ignored.empty()) return "";
+  const PlyHeaderLine& first = header.ignored.front();
+  const std::size_t more = header.ignored.size() - 1;
+  return path + ": header line " + std::to_string(first.number) + " ('" + shown_line(first.text) + "')" +
+         (more ? " and " + std::to_string(more) + " more" : "") +
+         ": no PLY keyword (ply, format, comment, obj_info, element, property, end_header); skipped";
 }
 
 }  // namespace scan2lod

@@ -36,13 +36,18 @@ struct PlyHeader {
   std::size_t lines = 0;  // the same, in lines
   std::vector<PlyElement> elements;
   std::vector<PlyHeaderLine> obj_info;  // the text after the keyword
+  // Lines of no keyword the format knows, outside any definition (Stanford's
+  // happy_stand scans carry 'bye' lines among their obj_info): skipped.
+  std::vector<PlyHeaderLine> ignored;
 };
 
-// Reads the header from `in` (left at the body's first byte). Throws
-// InputError naming `path` and the line for anything but ply, format,
-// comment, obj_info, element, property and end_header lines, for a line
-// that starts with blanks (PCL's reader aborts on those), or for a header
-// without end_header within 10,000 lines.
+// Reads the header from `in` (left at the body's first byte). A line whose
+// keyword is none of ply, format, comment, obj_info, element, property and
+// end_header carries nothing a reader needs: it is listed in `ignored`, as
+// PCL's reader (which earlier releases used) skips it. Throws InputError
+// naming `path` and the line for a malformed format, element or property
+// line, for a line that starts with blanks (PCL's reader aborts on those),
+// or for a header without end_header within 10,000 lines.
 PlyHeader read_ply_header(const std::string& path, std::istream& in);
 
 // Throws InputError: "header line N ('...'): what".
@@ -50,6 +55,10 @@ PlyHeader read_ply_header(const std::string& path, std::istream& in);
 
 // Bytes of a PLY scalar type (char ... float64), 0 for an unknown one.
 std::size_t ply_scalar_size(const std::string& type);
+
+// The warning for a header's ignored lines, naming the file and the first
+// of them; empty when there are none.
+std::string ignored_lines_warning(const std::string& path, const PlyHeader& header);
 
 // A line as it may appear in a message: bounded and printable.
 std::string shown_line(const std::string& line);

@@ -58,6 +58,7 @@ std::size_t scalar_size(Scalar s) {
 
 struct VertexLayout {
   PlyHeader::Format format = PlyHeader::Format::ascii;
+  std::string warning;  // header lines skipped
   std::size_t header_bytes = 0;
   std::size_t vertices = 0;
   std::vector<Scalar> types;
@@ -92,6 +93,7 @@ VertexLayout read_vertex_layout(const std::string& path) {
   VertexLayout L;
   L.format = h.format;
   L.header_bytes = h.bytes;
+  L.warning = ignored_lines_warning(path, h);
   const bool seen_format = h.has_format;
   bool seen_vertex = false;
   for (const PlyElement& e : h.elements) {
@@ -259,6 +261,7 @@ PointCloud read_point_cloud_ply(const std::string& path) {
   if (L.normal[0] >= 0) cloud.normals.resize(L.vertices);
   if (L.rgb[0] >= 0) cloud.colors.resize(L.vertices);
   read_ply_body(path, L, &cloud);
+  if (!L.warning.empty()) cloud.warnings.push_back(L.warning);
   return cloud;
 }
 

@@ -20,6 +20,7 @@ struct PointCloud {
   std::vector<Rgb> colors;     // empty, or one per point
   std::optional<Vec3f> viewpoint;  // the sensor's position, when the file gives one
   std::string source;              // file it came from, for messages
+  std::vector<std::string> warnings;  // what the reader skipped, for the user
   std::size_t size() const { return positions.size(); }
 };
 

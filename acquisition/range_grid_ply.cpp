@@ -25,6 +25,7 @@ namespace {
 
 struct PlyLayout {
   PlyHeader::Format format = PlyHeader::Format::ascii;
+  std::string warning;  // header lines skipped
   std::size_t header_bytes = 0;
   std::size_t header_lines = 0;
   long cols = -1, rows = -1;
@@ -50,6 +51,7 @@ PlyLayout read_layout(const std::string& path, std::ifstream& in) {
   PlyLayout L;
   L.format = h.format;
   L.header_bytes = h.bytes;
+  L.warning = ignored_lines_warning(path, h);
   L.header_lines = h.lines;
   for (const PlyHeaderLine& info : h.obj_info) {
     std::istringstream ls(info.text);
@@ -314,12 +316,11 @@ RangeImage decode_binary(const std::string& path, const PlyLayout& L) {
   return image;
 }
 
-}  // namespace
-
-RangeImage read_range_grid_ply(const std::string& path) {
+RangeImage read_range_grid(const std::string& path, std::string* warning) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open file");
   PlyLayout L = read_layout(path, in);
+  *warning = L.warning;
   if (L.format == PlyHeader::Format::ascii) check_ascii_body(path, in, L);
   in.close();
   if (L.format != PlyHeader::Format::ascii) {
@@ -369,6 +370,15 @@ RangeImage read_range_grid_ply(const std::string& path) {
                             std::uint8_t(packed)};
     }
   }
+  return image;
+}
+
+}  // namespace
+
+RangeImage read_range_grid_ply(const std::string& path) {
+  std::string warning;
+  RangeImage image = read_range_grid(path, &warning);
+  if (!warning.empty()) image.warnings.push_back(warning);
   return image;
 }
 

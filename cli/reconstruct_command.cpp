@@ -42,6 +42,7 @@ void add_reconstruct_command(CLI::App& app) {
     const AcquisitionOptions& acquisition = args->flags.acquisition;
     AcquisitionReport report;
     OrientedPoints points = load_oriented_points(args->inputs, acquisition, &report);
+    for (const std::string& warning : report.warnings) warn(warning);
     refuse_overwriting_inputs(args->output, report.files);
     const double read_seconds = std::chrono::duration<double>(clock::now() - start).count();
     BuildOptions only_mesh = build;

@@ -42,6 +42,7 @@ struct RangeImage {
   // VIEWPOINT); none for a scanner that looks down -z from the +z side
   // (Stanford range grids, virtual scans).
   std::optional<Vec3f> viewpoint;
+  std::vector<std::string> warnings;  // what the reader skipped, for the user
 };
 
 // Rigid placement of a scan in the common frame: p_world = rotation * p_scan + translation.

@@ -131,6 +131,38 @@ TEST(RangeGrid, BadFilesNameTheFileAndTheElement) {
   expect_range_grid_errors(cases);
 }
 
+// Stanford's happy_stand scans carry 'bye' lines among their obj_info lines;
+// PCL's reader, which earlier releases used, skips such lines, so they are
+// skipped with a warning naming the line, in ASCII and binary headers alike.
+// Malformed definitions are still refused (BadFilesNameTheFileAndTheElement).
+TEST(RangeGrid, HeaderLinesOfNoKeywordAreSkippedWithAWarning) {
+  auto with_bye = [](std::string text) {
+    text.insert(text.find("obj_info num_rows"), "bye\n");
+    text.insert(text.find("element vertex"), "bye\n");
+    return text;
+  };
+  fs::path plain = scratch("tiny.ply"), odd = scratch("tiny_bye.ply");
+  spit(plain, kTinyGrid);
+  spit(odd, with_bye(kTinyGrid));
+  const RangeImage a = read_range_grid_ply(plain.string()), b = read_range_grid_ply(odd.string());
+  EXPECT_TRUE(a.warnings.empty());
+  ASSERT_EQ(b.warnings.size(), 1u);
+  EXPECT_NE(b.warnings[0].find(odd.string()), std::string::npos) << b.warnings[0];
+  EXPECT_NE(b.warnings[0].find("('bye') and 1 more"), std::string::npos) << b.warnings[0];
+  ASSERT_EQ(a.points.size(), b.points.size());
+  for (std::size_t i = 0; i < a.points.size(); ++i)
+    if (!std::isnan(a.points[i].x())) EXPECT_EQ(a.points[i], b.points[i]);
+  // A binary scan as bundled: the same points, and the warning reaches the report.
+  const std::string bundled = slurp(std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun000.ply");
+  fs::path binary = scratch("bun000_bye.ply");
+  spit(binary, with_bye(bundled));
+  AcquisitionReport report;
+  const OrientedPoints points = load_oriented_points({binary.string()}, {}, &report);
+  EXPECT_EQ(points.size(), load_oriented_points({std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun000.ply"}).size());
+  ASSERT_EQ(report.warnings.size(), 1u);
+  EXPECT_NE(report.warnings[0].find("header line"), std::string::npos) << report.warnings[0];
+}
+
 TEST(RangeGrid, TruncatedBinaryFilesAreErrorsAtEveryLength) {
   const std::string bunny = kData + "/bun000.ply";
   ASSERT_TRUE(fs::exists(bunny));
