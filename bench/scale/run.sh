@@ -75,7 +75,8 @@ EOF
 cut_ratio() {
   local t="$1" e=()
   for m in core bricks; do
-    "$binary" extract "$work/$m.mco" --triangles "$t" -o "$work/cut.ply" --quiet
+    # A hierarchy whose coarsest cut is above t has no such cut: "-".
+    "$binary" extract "$work/$m.mco" --triangles "$t" -o "$work/cut.ply" --quiet 2>/dev/null || { echo "-"; return; }
     e+=("$("$binary" compare "$work/cut.ply" "$work/full.ply" --json --samples 200000 |
            python3 -c 'import json,sys; j=json.load(sys.stdin); print((j["a_to_b"]["mean"]+j["b_to_a"]["mean"])/2)')")
   done
