@@ -633,6 +633,51 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles) {
 
 }  // namespace
 
+std::vector<ClusterPage> cluster_pages(const ClusterHierarchy& h) {
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  std::vector<ClusterPage> pages;
+  std::vector<Sphere> spheres;
+  auto close = [&] {
+    ClusterPage& p = pages.back();
+    if (spheres.empty()) {
+      p.center[0] = p.center[1] = p.center[2] = 0;
+      p.radius = kInfinity;
+    } else {
+      const Sphere s = enclosing_sphere(spheres);
+      for (int k = 0; k < 3; ++k) p.center[k] = s.center[k];
+      p.radius = s.radius;
+    }
+    spheres.clear();
+  };
+  std::uint64_t triangles = 0;
+  for (std::size_t c = 0; c < h.clusters.size(); ++c) {
+    const Cluster& cl = h.clusters[c];
+    const bool joins = !pages.empty() && triangles + cl.triangle_count <= kPageTriangles &&
+                       h.clusters[c - 1].first_triangle + h.clusters[c - 1].triangle_count == cl.first_triangle;
+    if (!joins) {
+      if (!pages.empty()) close();
+      pages.push_back({std::uint32_t(c), 0, {0, 0, 0}, 0, kInfinity, 0});
+      triangles = 0;
+    }
+    ClusterPage& p = pages.back();
+    ++p.cluster_count;
+    triangles += cl.triangle_count;
+    p.min_error = std::min(p.min_error, cl.own_group < 0 ? 0.f : h.groups[std::size_t(cl.own_group)].error);
+    p.max_error = std::max(p.max_error, cl.parent_group < 0 ? kInfinity : h.groups[std::size_t(cl.parent_group)].error);
+    // A cluster lies in its parent group's sphere, or at the top in its own group's.
+    const std::int32_t g = cl.parent_group >= 0 ? cl.parent_group : cl.own_group;
+    if (g >= 0) {
+      const GroupBound& b = h.groups[std::size_t(g)];
+      Sphere s;
+      s.center = Vec3f(b.center[0], b.center[1], b.center[2]);
+      s.radius = b.radius;
+      spheres.push_back(s);
+    }
+  }
+  if (!pages.empty()) close();
+  return pages;
+}
+
 ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
                                          ArrayView<Rgb> colors, std::vector<Triangle> triangles,
                                          const ClusterOptions& options) {
@@ -684,6 +729,7 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
     run_rounds(s, &all);
     h = std::move(all.h);
   }
+  h.pages = cluster_pages(h);
   if (options.progress) options.progress(1.0);
   return h;
 }

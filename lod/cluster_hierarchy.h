@@ -48,6 +48,20 @@ struct Cluster {
   std::int32_t parent_group;     // the group it is simplified in next, -1 at the top
 };
 
+// A run of clusters whose triangles are one run of the model file's 'CTRI'
+// section: the unit a viewer reads from disk. A cut at error t draws a
+// cluster of the page only if min_error <= t < max_error; the sphere holds
+// every cluster of the page (from the groups' spheres: radius infinite when
+// the hierarchy has no group).
+struct ClusterPage {
+  std::uint32_t first_cluster;
+  std::uint32_t cluster_count;
+  float center[3];
+  float radius;
+  float min_error;  // the least own error of its clusters (0 at full detail)
+  float max_error;  // the largest parent error of its clusters (infinite at the top)
+};
+
 struct ClusterHierarchy {
   std::vector<Cluster> clusters;      // as finished: level by level in core, block by block in blocks
   std::vector<Triangle> triangles;    // every cluster's, into the model's shared vertices
@@ -60,6 +74,10 @@ struct ClusterHierarchy {
 
   std::size_t size() const { return clusters.size(); }
   int levels() const;                 // DAG rounds, 1 for a hierarchy of one level
+  // Clusters in consecutive runs of about kPageTriangles triangles (a run
+  // ends early where triangles are not contiguous); made by the build and
+  // kept in the model file.
+  std::vector<ClusterPage> pages;
   std::uint64_t stored_triangles() const;  // in memory or spooled
   void load_spooled();                // the spool's triangles into `triangles`
 };
@@ -92,6 +110,13 @@ struct ClusterOptions {
   // Called with the share of the triangles simplified so far (0 to 1); may be empty.
   std::function<void(double)> progress;
 };
+
+// Triangles a page holds at most, unless one cluster holds more (64 KiB at
+// 12 bytes a triangle: one read from a disk or over HTTP).
+constexpr std::uint32_t kPageTriangles = 5461;
+
+// The pages of `h`'s clusters as they lie (h.pages is not read).
+std::vector<ClusterPage> cluster_pages(const ClusterHierarchy& h);
 
 // Builds the hierarchy over `triangles`, which index `positions` (and
 // `normals`, `colors` when those are not empty, one per position). The

@@ -35,7 +35,8 @@ static_assert(sizeof(Vec3f) == 12 && sizeof(Triangle) == 12 && sizeof(Rgb) == 3 
                   sizeof(std::array<std::int32_t, kSubEdges>) == 4 * kSubEdges &&
                   sizeof(std::array<std::int32_t, 27>) == 108,
               "McOctree element types must be packed for the .mco layout");
-static_assert(sizeof(Cluster) == 16 && sizeof(GroupBound) == 20, "cluster records must be packed for the .mco layout");
+static_assert(sizeof(Cluster) == 16 && sizeof(GroupBound) == 20 && sizeof(ClusterPage) == 32,
+              "cluster records must be packed for the .mco layout");
 
 namespace {
 
@@ -181,6 +182,8 @@ const SectionSpec kSections[] = {
     {"CLUS", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->clusters); }, 3},
     {"CTRI", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->triangles); }, 3},
     {"CGRP", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->groups); }, 3},
+    // 4.4, optional: older readers read the clusters whole; this one derives the pages.
+    {"PAGE", Part::kClusters, false, [](LodModel& m, Records&) { return array(m.clusters->pages); }, kPacked},
 };
 
 bool has_part(const LodModel& model, Part part) {
@@ -254,6 +257,8 @@ void emit_model(const LodModel& model, std::uint32_t major,
   std::vector<OutSection> sections;
   for (const SectionSpec& spec : kSections) {
     if (!has_part(model, spec.part) || !spec.in(major)) continue;
+    // A hierarchy made by hand, without pages: the reader derives them.
+    if (std::strcmp(spec.tag, "PAGE") == 0 && model.clusters->pages.empty()) continue;
     const Payload p = spec.payload(readable, records);
     sections.push_back({fourcc(spec.tag), p.element_size, p.count, p.data, spec.required ? kRequired : 0});
     // A hierarchy built in blocks may hold its triangles on disk.
@@ -415,6 +420,7 @@ class Decoder {
   void read_pinned(LodArray* lod);
   void check_vertices(const LodModel& model) const;
   void decode_clusters(LodModel* model);
+  void check_pages(ClusterHierarchy& h) const;
   void check_octree_arrays(const McOctree& t) const;
   std::size_t check_nodes(const McOctree& t) const;
   void check_transitions(const McOctree& t, std::size_t internal) const;
@@ -618,8 +624,46 @@ void Decoder::decode_clusters(LodModel* model) {
   if (level0 != h.full_triangles)
     bad("the full-detail clusters hold " + std::to_string(level0) + " triangles, 'CINF' says " +
         std::to_string(h.full_triangles));
+  check_pages(h);
   model->cluster_vertex_first = std::size_t(first);
   model->cluster_vertex_count = std::size_t(count);
+}
+
+// Pages (4.4) must list the clusters in order, each page's triangles one run,
+// and each page's error interval must hold its clusters' own and parent
+// errors, so that a viewer that skips pages outside a threshold skips no
+// cluster a cut draws. A file without them gets them derived.
+void Decoder::check_pages(ClusterHierarchy& h) const {
+  if (h.pages.empty()) {
+    h.pages = cluster_pages(h);
+    return;
+  }
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < h.pages.size(); ++i) {
+    const ClusterPage& p = h.pages[i];
+    auto where = [i] { return "section 'PAGE': page " + std::to_string(i) + ": "; };
+    if (p.first_cluster != next || p.cluster_count == 0 || p.cluster_count > h.clusters.size() - next)
+      bad(where() + "clusters " + std::to_string(p.first_cluster) + "+" + std::to_string(p.cluster_count) +
+          " do not follow on from cluster " + std::to_string(next) + " of " + std::to_string(h.clusters.size()));
+    if (!(std::isfinite(p.center[0]) && std::isfinite(p.center[1]) && std::isfinite(p.center[2]) && p.radius >= 0 &&
+          p.min_error >= 0 && p.min_error <= p.max_error))
+      bad(where() + "needs a finite centre, radius >= 0 and 0 <= min error <= max error");
+    for (std::size_t c = p.first_cluster; c < std::size_t(p.first_cluster) + p.cluster_count; ++c) {
+      const Cluster& cl = h.clusters[c];
+      if (c > p.first_cluster &&
+          h.clusters[c - 1].first_triangle + h.clusters[c - 1].triangle_count != cl.first_triangle)
+        bad(where() + "cluster " + std::to_string(c) + "'s triangles do not follow on from the one before");
+      const float own = cl.own_group < 0 ? 0.f : h.groups[std::size_t(cl.own_group)].error;
+      const float parent = cl.parent_group < 0 ? std::numeric_limits<float>::infinity()
+                                               : h.groups[std::size_t(cl.parent_group)].error;
+      if (own < p.min_error || parent > p.max_error)
+        bad(where() + "cluster " + std::to_string(c) + "'s errors lie outside the page's");
+    }
+    next += p.cluster_count;
+  }
+  if (next != h.clusters.size())
+    bad("section 'PAGE': the pages hold " + std::to_string(next) + " of the " + std::to_string(h.clusters.size()) +
+        " clusters");
 }
 
 void Decoder::check_octree_arrays(const McOctree& t) const {

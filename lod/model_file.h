@@ -86,6 +86,13 @@
 //   OWNC u16 per triangle of the internal nodes, laid out as their triangles
 //                              the three edges whose vertices the triangle
 //                              joins, 4 bits each (lod/model_pack.h)
+// Added in 4.4, optional (a 4.3 reader skips it; a 4.4 reader of an older
+// file derives the pages, lod/cluster_hierarchy.h):
+//   PAGE  ClusterPage records of 32 bytes: u32 first cluster, u32 cluster
+//         count, f32 centre[3], radius, min error, max error: runs of
+//         clusters whose triangles are one run of CTRI (64 KiB at most unless
+//         one cluster is larger), so that a viewer reads only the pages whose
+//         sphere it sees and whose error interval holds its threshold
 // Every section is listed once, in kSections (model_file.cpp), with the
 // formats that hold it: the writer and the reader both walk that table. A new
 // array is a new row there (and, if it must agree with others, a check in the
@@ -104,7 +111,7 @@
 namespace scan2lod {
 
 constexpr std::uint32_t kModelFormatMajor = 4;
-constexpr std::uint32_t kModelFormatMinor = 3;
+constexpr std::uint32_t kModelFormatMinor = 4;
 
 // Writes `model` to `path` (extension .mco) through a temporary file renamed
 // into place (write_atomically): a failure leaves nothing under `path`.

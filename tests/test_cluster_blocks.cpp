@@ -2,9 +2,12 @@
 // the full detail is the input mesh, every cut is as sound as in core and as
 // close to the surface, the build is the same on any core count, and a
 // hierarchy spooled to disk writes the same model as one held in memory.
+// The pages (runs of clusters a viewer reads at once) tile the clusters and
+// hold every cluster a cut draws, in core and in blocks.
 // The bunny's scans at R = 256 (about 280 k triangles) in blocks of 16 k:
 // 32 blocks in the first pass.
 #include "acquisition/load_inputs.h"
+#include "core/error.h"
 #include "lod/lod_model.h"
 #include "lod/model_file.h"
 #include "lod/triangle_spool.h"
@@ -18,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <random>
 
@@ -153,6 +157,69 @@ TEST(ClusterBlocks, TheSameOnAnyCoreCountAndSpooledOrNot) {
     EXPECT_EQ(spooled.clusters->triangles, in_blocks().clusters->triangles);
   }
   EXPECT_FALSE(fs::exists(path)) << "the spool is removed with its object";
+}
+
+TEST(ClusterBlocks, PagesHoldEveryClusterACutDrawsAndSurviveTheFile) {
+  for (const LodModel* model : {&in_core(), &in_blocks()}) {
+    const ClusterHierarchy& h = *model->clusters;
+    ASSERT_FALSE(h.pages.empty());
+    std::size_t next = 0;
+    std::vector<std::size_t> page_of(h.clusters.size());
+    for (std::size_t i = 0; i < h.pages.size(); ++i) {
+      const ClusterPage& p = h.pages[i];
+      ASSERT_EQ(p.first_cluster, next) << "pages tile the clusters in order";
+      std::size_t triangles = 0;
+      const Vec3f centre(p.center[0], p.center[1], p.center[2]);
+      for (std::size_t c = p.first_cluster; c < p.first_cluster + p.cluster_count; ++c) {
+        page_of[c] = i;
+        const Cluster& cl = h.clusters[c];
+        if (c > p.first_cluster)
+          EXPECT_EQ(h.clusters[c - 1].first_triangle + h.clusters[c - 1].triangle_count, cl.first_triangle);
+        triangles += cl.triangle_count;
+        // The sphere holds the page's geometry.
+        for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t)
+          for (std::int32_t v : h.triangles[t])
+            EXPECT_LE((model->vertices.positions[std::size_t(v)] - centre).norm(), p.radius * 1.0001f);
+      }
+      EXPECT_TRUE(triangles <= kPageTriangles || p.cluster_count == 1) << "page " << i << ": " << triangles;
+      next += p.cluster_count;
+    }
+    EXPECT_EQ(next, h.clusters.size());
+    // Every cluster a uniform cut draws lies in a page whose interval holds the threshold.
+    const ClusterCutTable table = cluster_cut_table(h);
+    for (std::size_t k = 0; k < table.errors.size(); k += std::max<std::size_t>(1, table.errors.size() / 25)) {
+      const float t = table.errors[k];
+      for (std::size_t c = 0; c < h.clusters.size(); ++c) {
+        const Cluster& cl = h.clusters[c];
+        const float own = cl.own_group < 0 ? 0.f : h.groups[std::size_t(cl.own_group)].error;
+        const bool parent_applied = cl.parent_group >= 0 && h.groups[std::size_t(cl.parent_group)].error <= t;
+        if (own > t || parent_applied) continue;
+        const ClusterPage& p = h.pages[page_of[c]];
+        EXPECT_TRUE(p.min_error <= t && t < p.max_error) << "cluster " << c << " at " << t;
+      }
+    }
+  }
+  // Saved and loaded, the pages are the same; a file without them (a hand-made
+  // hierarchy) gets the same derived; a page that skips a cluster is refused.
+  const fs::path dir = testing::scratch_folder("cluster_blocks");
+  save_model((dir / "pages.mco").string(), in_blocks());
+  const LodModel loaded = load_model((dir / "pages.mco").string());
+  ASSERT_EQ(loaded.clusters->pages.size(), in_blocks().clusters->pages.size());
+  EXPECT_EQ(std::memcmp(loaded.clusters->pages.data(), in_blocks().clusters->pages.data(),
+                        sizeof(ClusterPage) * loaded.clusters->pages.size()), 0);
+  LodModel bare = loaded;
+  bare.clusters->pages.clear();
+  const std::vector<std::uint8_t> without = encode_model(bare);
+  EXPECT_EQ(encode_model(decode_model(without.data(), without.size(), "bare.mco")), encode_model(loaded));
+  LodModel gap = loaded;
+  gap.clusters->pages[1].first_cluster += 1;
+  const std::vector<std::uint8_t> bad = encode_model(gap);
+  try {
+    decode_model(bad.data(), bad.size(), "gap.mco");
+    ADD_FAILURE() << "a page that skips a cluster was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("section 'PAGE': page 1"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ClusterBlocks, TheCommandLineBuildsInBlocksThroughASpool) {
