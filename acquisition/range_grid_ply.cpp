@@ -9,7 +9,9 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -18,6 +20,7 @@
 #include <iterator>
 #include <limits>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 namespace scan2lod {
@@ -316,11 +319,126 @@ RangeImage decode_binary(const std::string& path, const PlyLayout& L) {
   return image;
 }
 
+// An ASCII range grid without packed colours, parsed once with
+// std::from_chars and checked as it goes (check_ascii_body's complaints),
+// then laid out as decode_binary does. PCL's reader parsed the body again
+// through streams: the bunny's ten ASCII scans took 1.4 s.
+RangeImage decode_ascii(const std::string& path, std::ifstream& in, const PlyLayout& L) {
+  const std::string body((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const char* at = body.data();
+  const char* const end = body.data() + body.size();
+  auto next_line = [&](std::string_view* line) {
+    if (at >= end) return false;
+    const char* stop = static_cast<const char*>(std::memchr(at, '\n', std::size_t(end - at)));
+    if (!stop) stop = end;
+    *line = std::string_view(at, std::size_t(stop - at));
+    if (!line->empty() && line->back() == '\r') line->remove_suffix(1);
+    at = stop < end ? stop + 1 : end;
+    return true;
+  };
+  // A number as strtod reads it (blanks first, an optional '+'), to the type's precision.
+  auto number = [](const char*& s, const char* stop, bool as_float, double* out) {
+    while (s < stop && (*s == ' ' || *s == '\t')) ++s;
+    if (s < stop && *s == '+') ++s;
+    std::from_chars_result r;
+    if (as_float) {
+      float f = 0;
+      r = std::from_chars(s, stop, f);
+      *out = f;
+    } else {
+      r = std::from_chars(s, stop, *out);
+    }
+    if (r.ec != std::errc() || r.ptr == s) return false;
+    s = r.ptr;
+    return std::isfinite(*out);
+  };
+  // What each property is to the image: x, y, z, confidence (float or double), red, green, blue.
+  static const char* kNames[7] = {"x", "y", "z", "confidence", "red", "green", "blue"};
+  std::vector<int> role(L.vertex_properties, -1);
+  std::vector<std::uint8_t> single(L.vertex_properties, 0);
+  bool has[7] = {};
+  for (std::size_t k = 0; k < L.vertex_properties; ++k) {
+    const std::string& type = L.vertex_types[k];
+    single[k] = type == "float" || type == "float32";
+    for (int r = 0; r < 7; ++r)
+      if (L.vertex_names[k] == kNames[r] &&
+          (r < 4 ? single[k] || type == "double" || type == "float64" : ply_scalar_size(type) == 1))
+        role[k] = r, has[r] = true;
+  }
+  const bool colors = has[4] && has[5] && has[6];
+  std::vector<float> values(L.vertices * 4, 0.f);
+  std::vector<Rgb> vertex_colors(colors ? L.vertices : 0);
+  std::string_view line;
+  for (std::size_t v = 0; v < L.vertices; ++v) {
+    const std::size_t line_no = L.header_lines + 1 + v;
+    if (!next_line(&line))
+      throw InputError(path, "file ends at vertex " + std::to_string(v) + " of " + std::to_string(L.vertices) +
+                                 " (truncated)");
+    const char* s = line.data();
+    const char* const stop = line.data() + line.size();
+    for (std::size_t k = 0; k < L.vertex_properties; ++k) {
+      double value = 0;
+      if (!number(s, stop, single[k] != 0, &value))
+        throw InputError(path, "line " + std::to_string(line_no) + ": vertex " + std::to_string(v) + " needs " +
+                                   std::to_string(L.vertex_properties) + " finite numbers, got '" + std::string(line) +
+                                   "'");
+      if (role[k] >= 4) vertex_colors[v][std::size_t(role[k] - 4)] = std::uint8_t(std::clamp(value, 0.0, 255.0));
+      else if (role[k] >= 0) values[4 * v + std::size_t(role[k])] = float(value);
+    }
+  }
+  RangeImage image;
+  image.cols = int(L.cols);
+  image.rows = int(L.rows);
+  image.source = path;
+  const std::size_t n = std::size_t(L.cols) * std::size_t(L.rows);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  image.points.assign(n, Vec3f(nan, nan, nan));
+  if (has[3]) image.confidence.assign(n, 0.f);
+  if (colors) image.colors.assign(n, Rgb{0, 0, 0});
+  for (std::size_t c = 0; c < L.grid_cells; ++c) {
+    const std::size_t line_no = L.header_lines + 1 + L.vertices + c;
+    if (!next_line(&line))
+      throw InputError(path, "file ends at range_grid cell " + std::to_string(c) + " of " +
+                                 std::to_string(L.grid_cells) + " (truncated)");
+    const char* s = line.data();
+    const char* const stop = line.data() + line.size();
+    auto integer = [&](long long* out) {
+      while (s < stop && (*s == ' ' || *s == '\t')) ++s;
+      if (s < stop && *s == '+') ++s;
+      const std::from_chars_result r = std::from_chars(s, stop, *out);
+      if (r.ec != std::errc() || r.ptr == s) return false;
+      s = r.ptr;
+      return true;
+    };
+    long long count = -1;
+    if (!integer(&count) || count < 0 || count > 255)
+      throw InputError(path, "line " + std::to_string(line_no) + ": range_grid cell " + std::to_string(c) +
+                                 " must start with an index count");
+    long long first = -1;
+    for (long long k = 0; k < count; ++k) {
+      long long index = -1;
+      if (!integer(&index) || index < 0 || std::size_t(index) >= L.vertices)
+        throw InputError(path, "line " + std::to_string(line_no) + ": range_grid cell " + std::to_string(c) +
+                                   " has a vertex index outside [0, " + std::to_string(L.vertices) + ")");
+      if (k == 0) first = index;
+    }
+    check_cell_order(path, L, c, count, first);
+    if (count == 0 || c >= n) continue;
+    const float* f = &values[4 * std::size_t(first)];
+    const Vec3f point(f[0], f[1], f[2]);
+    if (point.allFinite()) image.points[c] = point;
+    if (has[3]) image.confidence[c] = f[3];
+    if (colors) image.colors[c] = vertex_colors[std::size_t(first)];
+  }
+  return image;
+}
+
 RangeImage read_range_grid(const std::string& path, std::string* warning) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open file");
   PlyLayout L = read_layout(path, in);
   *warning = L.warning;
+  if (L.format == PlyHeader::Format::ascii && !needs_pcl(L)) return decode_ascii(path, in, L);
   if (L.format == PlyHeader::Format::ascii) check_ascii_body(path, in, L);
   in.close();
   if (L.format != PlyHeader::Format::ascii) {

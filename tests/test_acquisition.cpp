@@ -163,6 +163,29 @@ TEST(RangeGrid, HeaderLinesOfNoKeywordAreSkippedWithAWarning) {
   EXPECT_NE(report.warnings[0].find("header line"), std::string::npos) << report.warnings[0];
 }
 
+// Stanford's original bunny scans are ASCII; the bundled copies are the same
+// scans in binary. Read either way, every sample is the same float.
+TEST(RangeGrid, AsciiOriginalsReadAsTheirBinaryCopies) {
+  const std::string originals = std::string(SCAN2LOD_SHARED_DIR) + "/data/bunny/data/";
+  int compared = 0;
+  for (const char* name : {"bun000", "bun045", "bun090", "bun180", "bun270", "bun315", "chin", "ear_back", "top2",
+                           "top3"}) {
+    const std::string ascii = originals + name + ".ply", binary = std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/" + name + ".ply";
+    if (!fs::exists(ascii) || !fs::exists(binary)) continue;
+    const RangeImage a = read_range_grid_ply(ascii), b = read_range_grid_ply(binary);
+    ASSERT_EQ(a.cols, b.cols) << name;
+    ASSERT_EQ(a.rows, b.rows) << name;
+    ASSERT_EQ(a.points.size(), b.points.size()) << name;
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < a.points.size(); ++i)
+      differ += !(a.points[i] == b.points[i] || (std::isnan(a.points[i].x()) && std::isnan(b.points[i].x())));
+    EXPECT_EQ(differ, 0u) << name;
+    EXPECT_EQ(a.confidence, b.confidence) << name;
+    ++compared;
+  }
+  EXPECT_GE(compared, 9);
+}
+
 TEST(RangeGrid, TruncatedBinaryFilesAreErrorsAtEveryLength) {
   const std::string bunny = kData + "/bun000.ply";
   ASSERT_TRUE(fs::exists(bunny));
