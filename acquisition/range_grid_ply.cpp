@@ -263,6 +263,20 @@ bool needs_pcl(const PlyLayout& L) {
   return false;
 }
 
+// A grid of L's size with every cell a hole, and the attributes the file has.
+RangeImage empty_image(const std::string& path, const PlyLayout& L, bool confidence, bool colors) {
+  RangeImage image;
+  image.cols = int(L.cols);
+  image.rows = int(L.rows);
+  image.source = path;
+  const std::size_t n = std::size_t(L.cols) * std::size_t(L.rows);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  image.points.assign(n, Vec3f(nan, nan, nan));
+  if (confidence) image.confidence.assign(n, 0.f);
+  if (colors) image.colors.assign(n, Rgb{0, 0, 0});
+  return image;
+}
+
 // A binary range grid whose header and grid check_binary_* accepted: cell c
 // takes the vertex its first index names, NaN for an empty cell.
 RangeImage decode_binary(const std::string& path, const PlyLayout& L) {
@@ -286,15 +300,8 @@ RangeImage decode_binary(const std::string& path, const PlyLayout& L) {
     at += ply_scalar_size(L.vertex_types[k]);
   }
   const bool colors = offset[4] >= 0 && offset[5] >= 0 && offset[6] >= 0;
-  RangeImage image;
-  image.cols = int(L.cols);
-  image.rows = int(L.rows);
-  image.source = path;
-  const std::size_t n = std::size_t(L.cols) * std::size_t(L.rows);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  image.points.assign(n, Vec3f(nan, nan, nan));
-  if (offset[3] >= 0) image.confidence.assign(n, 0.f);
-  if (colors) image.colors.assign(n, Rgb{0, 0, 0});
+  RangeImage image = empty_image(path, L, offset[3] >= 0, colors);
+  const std::size_t n = image.points.size();
   std::size_t cursor = L.vertices * L.vertex_stride;
   for (std::size_t c = 0; c < n; ++c) {
     std::int64_t count = 0;
@@ -386,15 +393,8 @@ RangeImage decode_ascii(const std::string& path, std::ifstream& in, const PlyLay
       else if (role[k] >= 0) values[4 * v + std::size_t(role[k])] = float(value);
     }
   }
-  RangeImage image;
-  image.cols = int(L.cols);
-  image.rows = int(L.rows);
-  image.source = path;
-  const std::size_t n = std::size_t(L.cols) * std::size_t(L.rows);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  image.points.assign(n, Vec3f(nan, nan, nan));
-  if (has[3]) image.confidence.assign(n, 0.f);
-  if (colors) image.colors.assign(n, Rgb{0, 0, 0});
+  RangeImage image = empty_image(path, L, has[3], colors);
+  const std::size_t n = image.points.size();
   for (std::size_t c = 0; c < L.grid_cells; ++c) {
     const std::size_t line_no = L.header_lines + 1 + L.vertices + c;
     if (!next_line(&line))
