@@ -343,23 +343,31 @@ RangeImage decode_ascii(const std::string& path, std::ifstream& in, const PlyLay
     at = stop < end ? stop + 1 : end;
     return true;
   };
-  // A number as strtod reads it (blanks first, an optional '+'), to the type's precision.
+  // A number as strtod reads it (blanks first, an optional '+'), to the
+  // type's precision. A float out of float's range (1e-50, 1e39) is read as
+  // a double and narrowed, as PCL's reader did, not refused.
   auto number = [](const char*& s, const char* stop, bool as_float, double* out) {
     while (s < stop && (*s == ' ' || *s == '\t')) ++s;
     if (s < stop && *s == '+') ++s;
-    std::from_chars_result r;
     if (as_float) {
       float f = 0;
-      r = std::from_chars(s, stop, f);
-      *out = f;
-    } else {
-      r = std::from_chars(s, stop, *out);
+      const std::from_chars_result r = std::from_chars(s, stop, f);
+      if (r.ec == std::errc() && r.ptr != s) {
+        s = r.ptr;
+        *out = f;
+        return std::isfinite(f);
+      }
+      if (r.ec != std::errc::result_out_of_range) return false;
     }
-    if (r.ec != std::errc() || r.ptr == s) return false;
+    double wide = 0;
+    const std::from_chars_result r = std::from_chars(s, stop, wide);
+    if (r.ec != std::errc() || r.ptr == s || !std::isfinite(wide)) return false;
     s = r.ptr;
-    return std::isfinite(*out);
+    *out = as_float ? double(float(wide)) : wide;
+    return true;
   };
-  // What each property is to the image: x, y, z, confidence (float or double), red, green, blue.
+  // What each property is to the image: x, y, z (float: read_layout), confidence (any scalar, as PCL
+  // read it), red, green, blue (one byte each).
   static const char* kNames[7] = {"x", "y", "z", "confidence", "red", "green", "blue"};
   std::vector<int> role(L.vertex_properties, -1);
   std::vector<std::uint8_t> single(L.vertex_properties, 0);
@@ -369,7 +377,7 @@ RangeImage decode_ascii(const std::string& path, std::ifstream& in, const PlyLay
     single[k] = type == "float" || type == "float32";
     for (int r = 0; r < 7; ++r)
       if (L.vertex_names[k] == kNames[r] &&
-          (r < 4 ? single[k] || type == "double" || type == "float64" : ply_scalar_size(type) == 1))
+          (r < 3 ? single[k] != 0 : r == 3 ? ply_scalar_size(type) > 0 : ply_scalar_size(type) == 1))
         role[k] = r, has[r] = true;
   }
   const bool colors = has[4] && has[5] && has[6];

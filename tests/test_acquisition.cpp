@@ -92,6 +92,23 @@ TEST(RangeGrid, ReadsTheLatticeWithHoles) {
   EXPECT_TRUE(std::isnan(image.points[5].x()));
 }
 
+// Numbers beyond float's range were read by PCL and narrowed (0 or a
+// denormal; infinity makes a hole), not refused; a confidence of another
+// type than float was read too.
+TEST(RangeGrid, AsciiNumbersBeyondFloatAreNarrowedNotRefused) {
+  fs::path p = scratch("tiny_range.ply");
+  spit(p, "ply\nformat ascii 1.0\nobj_info num_cols 2\nobj_info num_rows 1\n"
+          "element vertex 2\nproperty float x\nproperty float y\nproperty float z\nproperty uchar confidence\n"
+          "element range_grid 2\nproperty list uchar int vertex_indices\nend_header\n"
+          "1e-50 0 +1 7\n1e39 0 1 9\n1 0\n1 1\n");
+  const RangeImage image = read_range_grid_ply(p.string());
+  ASSERT_EQ(image.points.size(), 2u);
+  EXPECT_EQ(image.points[0], Vec3f(0, 0, 1));
+  EXPECT_TRUE(std::isnan(image.points[1].x())) << "x = 1e39 is infinite in float: a hole";
+  ASSERT_EQ(image.confidence.size(), 2u);
+  EXPECT_EQ(image.confidence[0], 7.f);
+}
+
 TEST(RangeGrid, BinaryRoundTripIsExact) {
   fs::path p = scratch("tiny.ply");
   spit(p, kTinyGrid);
