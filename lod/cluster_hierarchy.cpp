@@ -339,7 +339,6 @@ void add_seed(const Block& from, std::size_t c, Block* b) {
   b->sphere.push_back(from.sphere[c]);
   b->own_error.push_back(from.own_error[c]);
   b->seeds = b->h.clusters.size();
-  b->round = std::max(b->round, int(cl.level) + 1);
 }
 
 // Phase 3: round after round, the block's active clusters grouped, each group
@@ -478,22 +477,6 @@ void lock_block_borders(Shared& s, Each each) {
   for (std::int32_t v : touched) s.vertex_group[std::size_t(v)] = -1;
 }
 
-// Cuts `count` items in order into runs of at most `block` triangles
-// (tris(i) of the i-th; an item larger than a block is a run alone): the
-// starts of the runs, the end last.
-template <class Tris>
-std::vector<std::size_t> runs_of(std::size_t count, std::size_t block, Tris tris) {
-  std::vector<std::size_t> starts{0};
-  std::size_t run = 0;
-  for (std::size_t i = 0; i < count; ++i) {
-    const std::size_t n = tris(i);
-    if (run > 0 && run + n > block) starts.push_back(i), run = 0;
-    run += n;
-  }
-  starts.push_back(count);
-  return starts;
-}
-
 // Phase 1 of a blocked build: the triangles reordered in place into blocks
 // of at most `block`, by halving at the median centroid across the longest
 // side of each part's box, as a KD-tree does (Nexus cuts its first blocks
@@ -531,15 +514,13 @@ std::vector<std::size_t> kd_blocks(ArrayView<Vec3f> positions, std::vector<Trian
 }
 
 // The blocked build, one DAG round a pass, as Ponchio's Nexus builds a level
-// at a time: each pass cuts the active clusters into blocks along the Morton
-// curve, runs one round in each block with the vertices it shares with other
-// blocks locked, and keeps what is left active for the next pass. The runs
-// start half a block later on every other pass, and the active set halves
-// from pass to pass, so a pass's block borders lie inside the next pass's
-// blocks and are simplified there. Once the active set fits one block, the
-// rounds run to the top in it. Pass 1 makes the full-detail clusters block
-// by block, from the triangles ordered by counting along the Morton curve of
-// their centroids (cells of 1/128 of the box).
+// at a time. Pass 1 cuts the full mesh into KD-tree blocks (kd_blocks) and
+// makes each block's full-detail clusters; each later pass cuts the active
+// clusters into blocks with METIS over the vertices they share, which cuts
+// where clusters share few, inside the last pass's blocks, so that a pass's
+// block borders are simplified in the next. Each block runs one round with
+// the vertices it shares with other blocks locked, and what is left active
+// goes on; once it fits one block, the rounds run to the top in it.
 ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles) {
   const ClusterOptions& options = *s.options;
   std::size_t block = std::max<std::size_t>(std::size_t(options.block_triangles), 1024);

@@ -57,21 +57,19 @@ double resident_bytes() {
 // small for that is warned of, since the surface is made by then.
 constexpr double kBlockBytesPerTriangle = 400.0;
 constexpr std::int64_t kSmallestBlock = 65536;
-std::int64_t cluster_block_for(double budget, std::size_t triangles, BuildReport* report) {
-  const double now = resident_bytes();
-  const double fixed = double(triangles) * (0.5 * 45.0 + 18.0);
-  const std::int64_t block = std::int64_t((budget - now - fixed) / kBlockBytesPerTriangle);
-  if (block < kSmallestBlock)
-    report->warnings.push_back("the cluster hierarchy of " + std::to_string(triangles) + " triangles needs about " +
-                               binary_size(now + fixed + double(kSmallestBlock) * kBlockBytesPerTriangle) +
-                               " in its smallest blocks (" + binary_size(now) + " held already), over the budget of " +
-                               binary_size(budget));
-  return std::max(block, kSmallestBlock);
-}
-
 // The cluster stage's peak in blocks of `block` triangles.
 double blocked_cluster_bytes(std::size_t triangles, std::int64_t block) {
   return resident_bytes() + double(triangles) * (0.5 * 45.0 + 18.0) + double(block) * kBlockBytesPerTriangle;
+}
+
+std::int64_t cluster_block_for(double budget, std::size_t triangles, BuildReport* report) {
+  const double without_block = blocked_cluster_bytes(triangles, 0);
+  const std::int64_t block = std::int64_t((budget - without_block) / kBlockBytesPerTriangle);
+  if (block < kSmallestBlock)
+    report->warnings.push_back("the cluster hierarchy of " + std::to_string(triangles) + " triangles needs about " +
+                               binary_size(blocked_cluster_bytes(triangles, kSmallestBlock)) +
+                               " in its smallest blocks, over the budget of " + binary_size(budget));
+  return std::max(block, kSmallestBlock);
 }
 
 // Phase 2: the strategy, from the in-core estimate against the budget.
