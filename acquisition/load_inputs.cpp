@@ -9,6 +9,8 @@
 #include "core/parallel_jobs.h"
 #include "io/mesh_file.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -115,11 +117,8 @@ struct Job {
   ScanPose pose;
 };
 
-}  // namespace
-
-OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
-                                    const AcquisitionOptions& options,
-                                    AcquisitionReport* report) {
+// The files to read, in order, with their poses; checks registration.
+std::vector<Job> plan_jobs(const std::vector<std::string>& inputs, const AcquisitionOptions& options) {
   if (inputs.empty()) throw InputError("", "no input files given");
   std::vector<Job> jobs;
   std::vector<std::string> loose_scans;
@@ -135,40 +134,82 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
     }
   }
   if (!options.unregistered) require_registration(loose_scans, with_conf);
+  return jobs;
+}
 
-  // Files are independent: read and orient them in parallel, merge in order.
-  // One file alone gets every core for its own parallel work (normal estimation).
-  std::vector<OrientedPoints> parts(jobs.size());
-  std::vector<std::uint8_t> estimated(jobs.size(), 0);
-  std::vector<std::vector<std::string>> warnings(jobs.size());
-  auto read_job = [&](std::size_t i, int threads) {
-    const Job& job = jobs[i];
-    if (job.kind == Kind::range_grid) {
-      const RangeImage image = read_range_grid_ply(job.file);
-      warnings[i] = image.warnings;
-      parts[i] = range_image_to_points(image, job.pose, options.lattice);
-    } else if (job.kind == Kind::pcd) {
-      ScanPose pose;
-      RangeImage image = read_organized_pcd(job.file, &pose);
-      parts[i] = range_image_to_points(image, pose, options.lattice);
-    } else if (job.kind == Kind::cloud) {
-      const PointCloud cloud = read_point_cloud(job.file);
-      warnings[i] = cloud.warnings;
-      estimated[i] = cloud.normals.empty();
-      CloudNormalOptions cloud_options = options.cloud;
-      cloud_options.threads = threads;
-      parts[i] = cloud_to_oriented_points(cloud, cloud_options);
-    } else {
-      parts[i] = mesh_to_oriented_points(read_mesh(job.file));
-    }
+// One file's oriented points; `estimated`: its normals were estimated.
+OrientedPoints read_job(const Job& job, const AcquisitionOptions& options, int threads, bool* estimated,
+                        std::vector<std::string>* warnings) {
+  *estimated = false;
+  if (job.kind == Kind::range_grid) {
+    const RangeImage image = read_range_grid_ply(job.file);
+    *warnings = image.warnings;
+    return range_image_to_points(image, job.pose, options.lattice);
+  }
+  if (job.kind == Kind::pcd) {
+    ScanPose pose;
+    RangeImage image = read_organized_pcd(job.file, &pose);
+    return range_image_to_points(image, pose, options.lattice);
+  }
+  if (job.kind == Kind::cloud) {
+    const PointCloud cloud = read_point_cloud(job.file);
+    *warnings = cloud.warnings;
+    *estimated = cloud.normals.empty();
+    CloudNormalOptions cloud_options = options.cloud;
+    cloud_options.threads = threads;
+    return cloud_to_oriented_points(cloud, cloud_options);
+  }
+  return mesh_to_oriented_points(read_mesh(job.file));
+}
+
+// Reads jobs [from, to) in parallel (one alone gets every core for its own
+// parallel work) and hands them to `take` in order.
+void read_jobs(const std::vector<Job>& jobs, std::size_t from, std::size_t to, const AcquisitionOptions& options,
+               AcquisitionReport* report, const std::function<void(OrientedPoints&&)>& take) {
+  const std::size_t count = to - from;
+  std::vector<OrientedPoints> parts(count);
+  std::vector<std::uint8_t> estimated(count, 0);
+  std::vector<std::vector<std::string>> warnings(count);
+  auto read = [&](std::size_t i, int threads) {
+    bool e = false;
+    parts[i] = read_job(jobs[from + i], options, threads, &e, &warnings[i]);
+    estimated[i] = e;
   };
-  if (jobs.size() == 1) read_job(0, options.threads);
-  else parallel_jobs(jobs.size(), options.threads, "reading inputs", [&](std::size_t i) { read_job(i, 1); });
+  if (count == 1) read(0, options.threads);
+  else parallel_jobs(count, options.threads, "reading inputs", [&](std::size_t i) { read(i, 1); });
+  for (std::size_t i = 0; i < count; ++i) {
+    const Job& job = jobs[from + i];
+    if (parts[i].size() == 0)
+      throw InputError(job.file, "holds no usable points (empty, or no sample has a "
+                                 "valid neighbour to estimate a normal)");
+    if (job.kind == Kind::cloud) ++report->clouds, report->clouds_estimated += estimated[i];
+    else (job.kind == Kind::mesh ? report->meshes : report->range_images)++;
+    report->files.push_back(job.file);
+    report->warnings.insert(report->warnings.end(), warnings[i].begin(), warnings[i].end());
+    take(std::move(parts[i]));
+  }
+}
 
+}  // namespace
+
+OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
+                                    const AcquisitionOptions& options,
+                                    AcquisitionReport* report) {
+  const std::vector<Job> jobs = plan_jobs(inputs, options);
+  // Files are independent: read and orient them in parallel, merge in order.
+  std::vector<OrientedPoints> parts;
+  AcquisitionReport local;
+  read_jobs(jobs, 0, jobs.size(), options, &local, [&](OrientedPoints&& part) { parts.push_back(std::move(part)); });
+  OrientedPoints points = merge_parts(&parts);
+  if (report) *report = std::move(local);
+  return points;
+}
+
+OrientedPoints merge_parts(std::vector<OrientedPoints>* parts) {
   OrientedPoints points;
   std::size_t total = 0;
   bool colors = false, confidence = false, spacing = false;
-  for (const OrientedPoints& part : parts) {
+  for (const OrientedPoints& part : *parts) {
     total += part.size();
     colors |= part.has_colors(), confidence |= !part.confidence.empty(), spacing |= !part.spacing.empty();
   }
@@ -179,20 +220,24 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
   if (colors) points.colors.reserve(total);
   if (confidence) points.confidence.reserve(total);
   if (spacing) points.spacing.reserve(total);
-  AcquisitionReport local;
-  for (std::size_t i = 0; i < jobs.size(); ++i) {
-    if (parts[i].size() == 0)
-      throw InputError(jobs[i].file, "holds no usable points (empty, or no sample has a "
-                                     "valid neighbour to estimate a normal)");
-    points.append(parts[i]);
-    parts[i] = OrientedPoints{};  // freed for the next part's copy to reuse
-    if (jobs[i].kind == Kind::cloud) ++local.clouds, local.clouds_estimated += estimated[i];
-    else (jobs[i].kind == Kind::mesh ? local.meshes : local.range_images)++;
-    local.files.push_back(jobs[i].file);
-    local.warnings.insert(local.warnings.end(), warnings[i].begin(), warnings[i].end());
+  for (OrientedPoints& part : *parts) {
+    points.append(part);
+    part = OrientedPoints{};  // freed for the next part's copy to reuse
   }
-  if (report) *report = std::move(local);
+  parts->clear();
   return points;
+}
+
+void stream_oriented_points(const std::vector<std::string>& inputs, const AcquisitionOptions& options,
+                            AcquisitionReport* report, const std::function<void(OrientedPoints&&)>& take) {
+  const std::vector<Job> jobs = plan_jobs(inputs, options);
+  AcquisitionReport local;
+  AcquisitionReport& r = report ? *report : local;
+  r = AcquisitionReport();
+  // As many files at once as there are cores: in memory are those only.
+  const std::size_t window = std::size_t(std::max(1, options.threads > 0 ? options.threads : omp_get_max_threads()));
+  for (std::size_t from = 0; from < jobs.size(); from += window)
+    read_jobs(jobs, from, std::min(jobs.size(), from + window), options, &r, take);
 }
 
 }  // namespace scan2lod

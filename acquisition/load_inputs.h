@@ -8,6 +8,7 @@
 #include "acquisition/lattice_normals.h"
 #include "core/types.h"
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -40,5 +41,15 @@ struct AcquisitionReport {
 OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
                                     const AcquisitionOptions& options = {},
                                     AcquisitionReport* report = nullptr);
+
+// The same, file by file: each file's oriented points go to `take` in input
+// order, and no more files are in memory at once than there are cores. For
+// inputs larger than memory (spooled to disk as they come). The report and
+// the errors are those of load_oriented_points().
+void stream_oriented_points(const std::vector<std::string>& inputs, const AcquisitionOptions& options,
+                            AcquisitionReport* report, const std::function<void(OrientedPoints&&)>& take);
+
+// The parts as one set, in order (OrientedPoints::append); empties `parts`.
+OrientedPoints merge_parts(std::vector<OrientedPoints>* parts);
 
 }  // namespace scan2lod

@@ -41,14 +41,14 @@ void add_reconstruct_command(CLI::App& app) {
     refuse_overwriting_inputs(args->output, args->inputs);
     const AcquisitionOptions& acquisition = args->flags.acquisition;
     AcquisitionReport report;
-    OrientedPoints points = load_oriented_points(args->inputs, acquisition, &report);
+    InputPoints points = load_within_budget(args->inputs, build, &report);
     for (const std::string& warning : report.warnings) warn(warning);
     refuse_overwriting_inputs(args->output, report.files);
     const double read_seconds = std::chrono::duration<double>(clock::now() - start).count();
     BuildOptions only_mesh = build;
     only_mesh.octree = only_mesh.clusters = false;
     BuildReport report_bricks;
-    Reconstruction r = reconstruct_within_budget(points, only_mesh, &report_bricks);
+    Reconstruction r = reconstruct_within_budget(&points, only_mesh, &report_bricks);
     for (const std::string& warning : report_bricks.warnings) warn(warning);
     require_surface(args->inputs, r, options.resolution);
     const auto write_start = clock::now();

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 
 namespace scan2lod {
 namespace {
@@ -73,8 +74,10 @@ std::int64_t cluster_block_for(double budget, std::size_t triangles, BuildReport
 }
 
 // Phase 2: the strategy, from the in-core estimate against the budget.
-bool choose_bricks(const OrientedPoints& points, const BuildOptions& options, double budget, BuildReport* report) {
-  report->estimated_bytes = estimate_reconstruction(points, options.reconstruct.resolution, options.reconstruct.threads).bytes;
+// Spooled points go by bricks: they took a quarter of the budget alone.
+bool choose_bricks(const OrientedPoints* points, const BuildOptions& options, double budget, BuildReport* report) {
+  if (!points) return true;
+  report->estimated_bytes = estimate_reconstruction(*points, options.reconstruct.resolution, options.reconstruct.threads).bytes;
   switch (options.strategy) {
     case BuildStrategy::kInCore: return false;
     case BuildStrategy::kBricks: return true;
@@ -83,18 +86,19 @@ bool choose_bricks(const OrientedPoints& points, const BuildOptions& options, do
   return report->estimated_bytes > budget;
 }
 
-}  // namespace
-
-Reconstruction reconstruct_within_budget(const OrientedPoints& points, const BuildOptions& options,
-                                         BuildReport* report_out) {
-  BuildReport local;
-  BuildReport* report = report_out ? report_out : &local;
+// The reconstruction from points in memory or spooled (one of the two);
+// release() once they are not needed any more.
+Reconstruction reconstruct_budgeted(const OrientedPoints* points, const PointSpool* spool, const BuildOptions& options,
+                                    BuildReport* report, const std::function<void()>& release) {
   const double budget = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
   report->budget_bytes = budget;
   report->in_bricks = choose_bricks(points, options, budget, report);
+  if (spool && options.strategy == BuildStrategy::kInCore)
+    throw InputError("", "the points alone take over a quarter of the budget of " + binary_size(budget) +
+                             ": an in-core reconstruction cannot fit; leave the strategy to the budget");
   // The octree needs every leaf cube at once. With no budget given, a build
   // that fits the machine (the limit before bricks existed) stays in core.
-  if (report->in_bricks && options.octree && options.strategy == BuildStrategy::kAutomatic &&
+  if (points && report->in_bricks && options.octree && options.strategy == BuildStrategy::kAutomatic &&
       options.memory_bytes <= 0 && report->estimated_bytes <= machine_memory_bytes()) {
     report->in_bricks = false;
     report->warnings.push_back("the reconstruction needs about " + binary_size(report->estimated_bytes) +
@@ -104,37 +108,98 @@ Reconstruction reconstruct_within_budget(const OrientedPoints& points, const Bui
   if (!report->in_bricks) {
     ReconstructOptions in_core = options.reconstruct;
     if (in_core.memory_limit <= 0 && options.memory_bytes > 0) in_core.memory_limit = options.memory_bytes;
-    return reconstruct(points, in_core);
+    Reconstruction r = reconstruct(*points, in_core);
+    release();
+    return r;
   }
-  if (options.octree)
-    throw InputError("", "the reconstruction needs about " + binary_size(report->estimated_bytes) +
-                             " in core and the budget is " + binary_size(budget) +
-                             ": in bricks only the cluster hierarchy can be built (--structure clusters), since "
-                             "the octree needs every leaf cube at once");
-  if (options.work_dir.empty()) throw InputError("", "a build in bricks needs a work folder");
   BrickOptions bricks;
   bricks.work_dir = options.work_dir;
   bricks.memory_bytes = budget;
   bricks.brick_cubes = options.brick_cubes;
-  report->plan = plan_bricks(points, options.reconstruct, bricks);
+  bricks.points_binned = release;
+  if (options.octree)
+    throw InputError("", (spool ? "the points alone take over a quarter of the budget of " + binary_size(budget)
+                                : "the reconstruction needs about " + binary_size(report->estimated_bytes) +
+                                      " in core and the budget is " + binary_size(budget)) +
+                             ": in bricks only the cluster hierarchy can be built (--structure clusters), since "
+                             "the octree needs every leaf cube at once");
+  if (options.work_dir.empty()) throw InputError("", "a build in bricks needs a work folder");
+  report->plan = spool ? plan_bricks(*spool, options.reconstruct, bricks) : plan_bricks(*points, options.reconstruct, bricks);
+  if (spool) report->estimated_bytes = report->plan.estimated_bytes;
   // The bricks hold the budget; the weld after them does not yet: say so.
   if (report->plan.weld_bytes > budget)
     report->warnings.push_back("the welded surface will need about " + binary_size(report->plan.weld_bytes) +
                                ", over the budget of " + binary_size(budget) +
                                ": the bricks keep to it, the weld of their surfaces is not out of core yet");
-  return reconstruct_in_bricks(points, options.reconstruct, bricks, &report->bricks, &report->plan);
+  return spool ? reconstruct_in_bricks(*spool, options.reconstruct, bricks, &report->bricks, &report->plan)
+               : reconstruct_in_bricks(*points, options.reconstruct, bricks, &report->bricks, &report->plan);
+}
+
+// Points in memory take about this much each (positions, normals, spacing,
+// confidence; colours) on their way in, merged.
+constexpr double kInputBytesPerPoint = 36.0;
+
+}  // namespace
+
+InputPoints::~InputPoints() {
+  spool.reset();
+  std::error_code ec;  // a folder that holds finished bricks stays, to resume from
+  if (!made_folder.empty()) std::filesystem::remove(made_folder, ec);
+}
+
+InputPoints load_within_budget(const std::vector<std::string>& inputs, const BuildOptions& options,
+                               AcquisitionReport* report) {
+  const double budget = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
+  InputPoints loaded;
+  std::vector<OrientedPoints> parts;
+  double held = 0;
+  stream_oriented_points(inputs, options.acquisition, report, [&](OrientedPoints&& part) {
+    if (!loaded.spool && options.strategy != BuildStrategy::kBricks &&
+        held + kInputBytesPerPoint * double(part.size()) <= 0.25 * budget) {
+      held += kInputBytesPerPoint * double(part.size());
+      parts.push_back(std::move(part));
+      return;
+    }
+    if (!loaded.spool) {
+      if (options.work_dir.empty())
+        throw InputError("", "a build in bricks needs a work folder: the points go there as they are read");
+      std::error_code ec;
+      if (!std::filesystem::exists(options.work_dir, ec)) loaded.made_folder = options.work_dir;
+      std::filesystem::create_directories(options.work_dir, ec);
+      if (ec) throw InputError(options.work_dir, "cannot make the work folder: " + ec.message());
+      loaded.spool = std::make_unique<PointSpool>((std::filesystem::path(options.work_dir) / "points.spool").string());
+      for (OrientedPoints& held_part : parts) loaded.spool->add(held_part), held_part = OrientedPoints();
+      parts.clear();
+    }
+    loaded.spool->add(part);
+    part = OrientedPoints();
+  });
+  if (loaded.spool) loaded.spool->close();
+  else loaded.points = merge_parts(&parts);
+  return loaded;
+}
+
+Reconstruction reconstruct_within_budget(InputPoints* points, const BuildOptions& options, BuildReport* report_out) {
+  BuildReport local;
+  BuildReport* report = report_out ? report_out : &local;
+  return reconstruct_budgeted(points->spool ? nullptr : &points->points, points->spool.get(), options, report, [points] {
+    points->points = OrientedPoints();
+    points->spool.reset();
+  });
 }
 
 namespace {
 
-// `release`, when given, is `points`, freed once the reconstruction is done
-// with them (they are the largest thing a big build holds).
-LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,
-                           BuildReport* report_out, const std::string& source, OrientedPoints* release = nullptr) {
+// From points in memory or spooled (one of the two); release() frees them
+// once the reconstruction is done with them (they are the largest thing a
+// big build holds).
+LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool, const TriangleMesh* mesh,
+                           const BuildOptions& options, BuildReport* report_out, const std::string& source,
+                           const std::function<void()>& release) {
   if (!options.octree && !options.clusters) throw InputError("", "no LOD structure asked for");
   BuildReport local;
   BuildReport& report = report_out ? *report_out : local;
-  report.points = points.size();
+  report.points = spool ? spool->census().count : points->size();
   report.mesh_input = mesh != nullptr;
   const bool reconstructs = options.octree || !mesh;
   // One progress for the whole build (reconstruction-relative shares).
@@ -142,7 +207,7 @@ LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mes
   auto stage = Clock::now();
   Reconstruction r;
   if (reconstructs) {
-    r = reconstruct_within_budget(points, options, &report);
+    r = reconstruct_budgeted(points, spool, options, &report, release);
     report.reconstruct = r.stats;
     report.warnings.insert(report.warnings.end(), r.warnings.begin(), r.warnings.end());
     if (r.mesh.triangles.empty())
@@ -151,7 +216,7 @@ LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mes
                                " cubes near them, none crossed by the surface (too few or too sparse points for "
                                "this resolution: try a coarser --resolution)");
   }
-  if (release) *release = OrientedPoints();
+  release();
   report.seconds_reconstruct = seconds_since(stage);
   report.peak_bytes_reconstruct = peak_bytes();
   report.full_triangles = mesh && !options.octree ? mesh->triangles.size() : r.mesh.triangles.size();
@@ -212,14 +277,14 @@ LodModel build_from_points(const OrientedPoints& points, const TriangleMesh* mes
 
 LodModel build_model(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,
                      BuildReport* report) {
-  return build_from_points(points, mesh, options, report, "");
+  return build_from_points(&points, nullptr, mesh, options, report, "", [] {});
 }
 
 LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions& options, BuildReport* report_out) {
   BuildReport local;
   BuildReport& report = report_out ? *report_out : local;
   const auto start = Clock::now();
-  OrientedPoints points = load_oriented_points(inputs, options.acquisition, &report.acquisition);
+  InputPoints points = load_within_budget(inputs, options, &report.acquisition);
   report.warnings = report.acquisition.warnings;
   report.mesh_input = report.acquisition.meshes == 1 && report.acquisition.files.size() == 1;
   TriangleMesh mesh;
@@ -229,9 +294,12 @@ LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions&
   const double read = report.seconds_read;
   std::string names;
   for (const std::string& input : inputs) names += (names.empty() ? "" : ", ") + input;
-  LodModel model =
-      build_from_points(points, report.mesh_input && options.clusters ? &mesh : nullptr, options, &report, names,
-                        &points);
+  LodModel model = build_from_points(points.spool ? nullptr : &points.points, points.spool.get(),
+                                     report.mesh_input && options.clusters ? &mesh : nullptr, options, &report, names,
+                                     [&points] {
+                                       points.points = OrientedPoints();
+                                       points.spool.reset();
+                                     });
   report.acquisition = acquisition;
   report.seconds_read = read;
   return model;

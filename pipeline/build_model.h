@@ -12,6 +12,7 @@
 #include "reconstruct/brick_reconstruction.h"
 #include "reconstruct/marching_cubes.h"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -64,11 +65,29 @@ struct BuildReport {
 LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions& options,
                      BuildReport* report = nullptr);
 
+// The inputs' oriented points: in memory while they take less than a quarter
+// of the budget (past that the in-core reconstruction cannot fit), else
+// spooled to options.work_dir as the files are read, a few at a time; always
+// spooled when the strategy is bricks.
+struct InputPoints {
+  OrientedPoints points;              // in memory
+  std::unique_ptr<PointSpool> spool;  // or on disk (closed)
+  std::string made_folder;            // the work folder the spool made, removed with it when left empty
+  std::size_t size() const { return spool ? spool->census().count : points.size(); }
+  InputPoints() = default;
+  InputPoints(InputPoints&&) = default;
+  ~InputPoints();
+};
+InputPoints load_within_budget(const std::vector<std::string>& inputs, const BuildOptions& options,
+                               AcquisitionReport* report = nullptr);
+
 // The reconstruction build_model() makes: in core when its estimate fits
 // options.memory_bytes, else brick by brick in options.work_dir (then the
-// octree is refused, and `leaves` is empty). Fills the report's strategy,
+// octree is refused, and `leaves` is empty); spooled points always go by
+// bricks. Frees the points (memory or spool) once it is done with them:
+// in bricks, as soon as they are binned. Fills the report's strategy,
 // estimate, plan and brick counts.
-Reconstruction reconstruct_within_budget(const OrientedPoints& points, const BuildOptions& options,
+Reconstruction reconstruct_within_budget(InputPoints* points, const BuildOptions& options,
                                          BuildReport* report = nullptr);
 
 // The same from points already loaded (benches, tests); `mesh`, when not

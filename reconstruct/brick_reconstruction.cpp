@@ -8,11 +8,14 @@
 #include "reconstruct/brick_surface.h"
 #include "reconstruct/cube_table.h"
 #include "reconstruct/hole_filling.h"
+#include "reconstruct/point_spool.h"
 #include "reconstruct/resolution_guard.h"
 #include "reconstruct/signed_distance.h"
 #include "reconstruct/welded_surface.h"
 
+#include <fcntl.h>
 #include <omp.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -21,6 +24,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <unordered_map>
@@ -52,15 +56,12 @@ std::uint64_t mix_bytes(std::uint64_t h, const std::vector<T>& values) {
   return mix(h, bytes);
 }
 
-std::uint64_t plan_key(const OrientedPoints& points, const ReconstructOptions& o, int brick_cubes) {
-  std::uint64_t h = 0x5332'4c42'524b'0002ull;  // format of the brick files
+std::uint64_t plan_key(const PointCensus& points, const ReconstructOptions& o, int brick_cubes) {
+  std::uint64_t h = 0x5332'4c42'524b'0003ull;  // format of the brick files
   // Another release may decide differently: its bricks are not taken.
   for (const char* c = SCAN2LOD_VERSION; *c; ++c) h = mix(h, std::uint64_t(*c));
-  h = mix_bytes(h, points.positions);
-  h = mix_bytes(h, points.normals);
-  h = mix_bytes(h, points.colors);
-  h = mix_bytes(h, points.confidence);
-  h = mix_bytes(h, points.spacing);
+  h = mix(mix(h, points.hash), points.count);
+  h = mix(h, std::uint64_t(points.colors) | std::uint64_t(points.confidence) << 1 | std::uint64_t(points.spacing) << 2);
   const double values[] = {double(o.resolution), double(o.margin), o.reach, double(int(o.distance.method)),
                            double(o.distance.neighbours), o.distance.kernel_width, o.distance.max_distance,
                            double(brick_cubes)};
@@ -71,6 +72,13 @@ std::uint64_t plan_key(const OrientedPoints& points, const ReconstructOptions& o
   }
   return h;
 }
+
+// The points a brick build reads, in memory or spooled to disk: what they
+// are (the census) and a pass over their records.
+struct PointSource {
+  PointCensus census;
+  std::function<void(const RecordVisitor&)> for_each;
+};
 
 // How far a point's influence reaches, in world units. A corner is defined
 // only within max_distance scales of its closest point p0 (scale: max(cube,
@@ -96,26 +104,76 @@ double base_halo(const ReconstructOptions& o, double cube_size) {
   return std::max(influence(influence_factor(o), cube_size, cube_size), (o.margin + 1) * cube_size * std::sqrt(3.0));
 }
 
-int brick_of(const CubeGrid& grid, int brick_cubes, int per_axis, const Vec3f& p, const Vec3d& offset) {
+std::array<int, 3> brick_coords(const CubeGrid& grid, int brick_cubes, int per_axis, const Vec3f& p,
+                                const Vec3d& offset) {
   const Vec3d g = ((p.cast<double>() + offset) - grid.origin) / (grid.cube_size * brick_cubes);
-  int b[3];
+  std::array<int, 3> b;
   for (int a = 0; a < 3; ++a) b[a] = std::clamp(int(std::floor(g[a])), 0, per_axis - 1);
+  return b;
+}
+
+int brick_of(const CubeGrid& grid, int brick_cubes, int per_axis, const Vec3f& p, const Vec3d& offset) {
+  const std::array<int, 3> b = brick_coords(grid, brick_cubes, per_axis, p, offset);
   return (b[2] * per_axis + b[1]) * per_axis + b[0];
 }
 
-// Points per brick (own points only), largest first.
-std::size_t largest_brick(const OrientedPoints& points, const CubeGrid& grid, int brick_cubes, int per_axis) {
-  std::vector<std::uint32_t> bins;
-  for (const Vec3f& p : points.positions) bins.push_back(std::uint32_t(brick_of(grid, brick_cubes, per_axis, p, Vec3d::Zero())));
-  std::sort(bins.begin(), bins.end());
-  std::size_t worst = 0;
-  for (std::size_t i = 0; i < bins.size();) {
-    std::size_t j = i;
-    while (j < bins.size() && bins[j] == bins[i]) ++j;
-    worst = std::max(worst, j - i);
-    i = j;
+// What the plan reads off the points in one pass: the coarse occupancy
+// (the surface's area), points per brick of the smallest size (which nest
+// into every larger size, all being powers of two), and a sample of the
+// spacings for their median.
+struct PointSurvey {
+  ReconstructionEstimate whole;
+  int smallest = 0;                                  // brick side of the counts
+  std::vector<std::pair<std::array<int, 3>, std::size_t>> counts;  // brick (at `smallest`), its points
+  double median_spacing = 0;
+
+  // Points of the most crowded brick of side B.
+  std::size_t largest(int B) const {
+    int shift = 0;
+    while ((smallest << shift) < B) ++shift;
+    std::unordered_map<std::uint64_t, std::size_t> merged;
+    std::size_t worst = 0;
+    for (const auto& [b, n] : counts) {
+      std::size_t& m = merged[pack_key(b[0] >> shift, b[1] >> shift, b[2] >> shift)];
+      m += n;
+      worst = std::max(worst, m);
+    }
+    return worst;
   }
-  return worst;
+};
+
+PointSurvey survey(const PointSource& points, const CubeGrid& grid, int smallest, int threads) {
+  PointSurvey s;
+  s.smallest = smallest;
+  const int R = grid.resolution, n = (R + smallest - 1) / smallest;
+  CoarseOccupancy occupancy(points.census.box);
+  std::unordered_map<std::uint64_t, std::size_t> bins;
+  std::uint64_t last = ~std::uint64_t(0);
+  std::size_t* last_count = nullptr;
+  std::vector<float> spacings;
+  const std::size_t every = std::max<std::size_t>(1, points.census.count >> 20);
+  std::size_t seen = 0;
+  points.for_each([&](const PointRecord* r, std::size_t count) {
+    for (std::size_t i = 0; i < count; ++i, ++seen) {
+      occupancy.add(r[i].position);
+      const std::array<int, 3> c = brick_coords(grid, smallest, n, r[i].position, Vec3d::Zero());
+      const std::uint64_t b = pack_key(c[0], c[1], c[2]);
+      if (b != last) last = b, last_count = &bins[b];
+      ++*last_count;
+      if (points.census.spacing && seen % every == 0) spacings.push_back(r[i].spacing);
+    }
+  });
+  for (const auto& [b, count] : bins) {
+    std::array<int, 3> c;
+    unpack_key(b, &c[0], &c[1], &c[2]);
+    s.counts.push_back({c, count});
+  }
+  s.whole = occupancy.estimate(points.census.count, R, threads);
+  if (!spacings.empty()) {
+    std::nth_element(spacings.begin(), spacings.begin() + spacings.size() / 2, spacings.end());
+    s.median_spacing = spacings[spacings.size() / 2];
+  }
+  return s;
 }
 
 // The weld holds the whole surface: leaves, triangles, vertices and their
@@ -222,15 +280,30 @@ bool read_brick(const std::string& path, std::uint64_t key, BrickFile* b) {
 
 // ---- phases ----------------------------------------------------------------
 
+// The points binned by brick in one file of records (points.bins in the work
+// folder), brick after brick, each brick's in input order: a brick gathers
+// its points and halo from its neighbours' runs, and nothing else of the
+// points is in memory.
 struct Bins {
   std::vector<std::uint32_t> bricks;  // bricks that hold points, ascending
-  std::vector<std::size_t> first;     // their points run [first[i], first[i + 1]) in `points`
-  std::vector<std::uint32_t> points;  // ascending within a brick
+  std::vector<std::size_t> first;     // their records run [first[i], first[i + 1]) in the file
+  PointCensus census;
+  std::string path;
+  int fd = -1;
   // No point outside this many world units reaches into a brick, under the
   // normal limits and the relaxed ones of hole closing: the base, or more for
   // the bricks that points of wide spacing reach (listed here).
   float base = 0, relaxed_base = 0;
   std::unordered_map<std::uint32_t, std::pair<float, float>> wide;
+
+  Bins() = default;
+  Bins(const Bins&) = delete;
+  Bins& operator=(const Bins&) = delete;
+  ~Bins() {
+    if (fd >= 0) ::close(fd);
+    std::error_code ec;
+    if (!path.empty()) fs::remove(path, ec);
+  }
   float far(std::uint32_t brick) const {
     const auto it = wide.find(brick);
     return it == wide.end() ? base : it->second.first;
@@ -243,48 +316,87 @@ struct Bins {
 
 // Phase 1: points by the brick they lie in, and each brick's halo: the base,
 // or the influence of any point whose influence reaches the brick (a point
-// of wide spacing, at a scan's grazing rim, reaches far).
-Bins bin_points(const OrientedPoints& points, const BrickPlan& plan, const ReconstructOptions& options) {
+// of wide spacing, at a scan's grazing rim, reaches far). Two passes over the
+// points: counts (and wide reaches), then records to their brick's run,
+// through one small buffer per brick.
+void bin_points(const PointSource& points, const BrickPlan& plan, const ReconstructOptions& options,
+                const std::string& path, Bins* bins) {
   const int n = plan.bricks_per_axis;
   const double h = plan.grid.cube_size;
   ReconstructOptions relaxed = options;
   relaxed.distance.max_distance *= 2.f;
   const double factor = influence_factor(options), relaxed_factor = influence_factor(relaxed);
-  Bins bins;
-  bins.base = float(plan.halo);
-  bins.relaxed_base = float(influence(relaxed_factor, h, h));
-  std::vector<std::uint64_t> pairs(points.size());
-  const bool spaced = points.spacing.size() == points.size();
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Vec3f& p = points.positions[i];
-    pairs[i] = std::uint64_t(brick_of(plan.grid, plan.brick_cubes, n, p, Vec3d::Zero())) << 32 | i;
-    if (!spaced || points.spacing[i] <= h) continue;
-    const double reach = influence(relaxed_factor, points.spacing[i], h);
-    const Vec3d r = Vec3d::Constant(reach);
-    const int lo = brick_of(plan.grid, plan.brick_cubes, n, p, -r), hi = brick_of(plan.grid, plan.brick_cubes, n, p, r);
-    const float normal = float(influence(factor, points.spacing[i], h));
-    for (int z = lo / (n * n); z <= hi / (n * n); ++z)
-      for (int y = lo / n % n; y <= hi / n % n; ++y)
-        for (int x = lo % n; x <= hi % n; ++x) {
-          const auto [it, fresh] = bins.wide.try_emplace(std::uint32_t((z * n + y) * n + x), bins.base, bins.relaxed_base);
-          it->second.first = std::max(it->second.first, normal);
-          it->second.second = std::max(it->second.second, float(reach));
-        }
-  }
-  std::sort(pairs.begin(), pairs.end());
-  bins.points.resize(pairs.size());
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
-    const std::uint32_t b = std::uint32_t(pairs[i] >> 32);
-    if (bins.bricks.empty() || bins.bricks.back() != b) bins.bricks.push_back(b), bins.first.push_back(i);
-    bins.points[i] = std::uint32_t(pairs[i]);
-  }
-  bins.first.push_back(pairs.size());
-  return bins;
+  bins->census = points.census;
+  bins->base = float(plan.halo);
+  bins->relaxed_base = float(influence(relaxed_factor, h, h));
+  auto brick = [&](const Vec3f& p) {
+    return std::uint32_t(brick_of(plan.grid, plan.brick_cubes, n, p, Vec3d::Zero()));
+  };
+  std::unordered_map<std::uint32_t, std::size_t> counts;
+  points.for_each([&](const PointRecord* r, std::size_t count) {
+    for (std::size_t i = 0; i < count; ++i) {
+      ++counts[brick(r[i].position)];
+      if (!points.census.spacing || r[i].spacing <= h) continue;
+      const Vec3f& p = r[i].position;
+      const double reach = influence(relaxed_factor, r[i].spacing, h);
+      const Vec3d d = Vec3d::Constant(reach);
+      const int lo = brick_of(plan.grid, plan.brick_cubes, n, p, -d), hi = brick_of(plan.grid, plan.brick_cubes, n, p, d);
+      const float normal = float(influence(factor, r[i].spacing, h));
+      for (int z = lo / (n * n); z <= hi / (n * n); ++z)
+        for (int y = lo / n % n; y <= hi / n % n; ++y)
+          for (int x = lo % n; x <= hi % n; ++x) {
+            const auto [it, fresh] =
+                bins->wide.try_emplace(std::uint32_t((z * n + y) * n + x), bins->base, bins->relaxed_base);
+            it->second.first = std::max(it->second.first, normal);
+            it->second.second = std::max(it->second.second, float(reach));
+          }
+    }
+  });
+  for (const auto& [b, count] : counts) bins->bricks.push_back(b);
+  std::sort(bins->bricks.begin(), bins->bricks.end());
+  bins->first.push_back(0);
+  for (std::uint32_t b : bins->bricks) bins->first.push_back(bins->first.back() + counts[b]);
+
+  bins->path = path;
+  bins->fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (bins->fd < 0) throw InputError(path, "cannot write the binned points: " + std::string(std::strerror(errno)));
+  // One buffer per brick, 16 MiB in all at most, written out at the brick's cursor when full.
+  const std::size_t room = std::clamp<std::size_t>((std::size_t(16) << 20) / sizeof(PointRecord) /
+                                                       std::max<std::size_t>(1, bins->bricks.size()), 16, 4096);
+  std::vector<std::vector<PointRecord>> buffers(bins->bricks.size());
+  std::vector<std::size_t> cursor(bins->first.begin(), bins->first.end() - 1);
+  auto flush = [&](std::size_t c) {
+    std::vector<PointRecord>& buffer = buffers[c];
+    const char* bytes = reinterpret_cast<const char*>(buffer.data());
+    std::size_t left = buffer.size() * sizeof(PointRecord);
+    off_t at = off_t(cursor[c] * sizeof(PointRecord));
+    while (left > 0) {
+      const ssize_t wrote = ::pwrite(bins->fd, bytes, left, at);
+      if (wrote < 0 && errno == EINTR) continue;
+      if (wrote <= 0) throw InputError(path, "cannot write the binned points: " + std::string(std::strerror(errno)));
+      bytes += wrote, left -= std::size_t(wrote), at += wrote;
+    }
+    cursor[c] += buffer.size();
+    buffer.clear();
+  };
+  std::uint32_t last = ~0u;
+  std::size_t c = 0;
+  points.for_each([&](const PointRecord* r, std::size_t count) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::uint32_t b = brick(r[i].position);
+      if (b != last)
+        last = b, c = std::size_t(std::lower_bound(bins->bricks.begin(), bins->bricks.end(), b) - bins->bricks.begin());
+      if (buffers[c].capacity() == 0) buffers[c].reserve(room);
+      buffers[c].push_back(r[i]);
+      if (buffers[c].size() == room) flush(c);
+    }
+  });
+  for (std::size_t k = 0; k < buffers.size(); ++k) flush(k);
 }
 
-// A brick's points with its halo, in their input order.
-OrientedPoints gather(const OrientedPoints& all, const Bins& bins, const BrickPlan& plan, std::uint32_t brick,
-                      double halo) {
+// A brick's points with its halo, in their input order: read from its
+// neighbours' runs a buffer at a time, and kept when inside.
+OrientedPoints gather(const Bins& bins, const BrickPlan& plan, std::uint32_t brick, double halo) {
   const int n = plan.bricks_per_axis, B = plan.brick_cubes;
   const int b[3] = {int(brick) % n, int(brick) / n % n, int(brick) / (n * n)};
   const double side = plan.grid.cube_size * B;
@@ -296,7 +408,7 @@ OrientedPoints gather(const OrientedPoints& all, const Bins& bins, const BrickPl
     from[a] = std::max(0, int(std::floor((lo[a] - plan.grid.origin[a]) / side)));
     to[a] = std::min(n - 1, int(std::floor((hi[a] - plan.grid.origin[a]) / side)));
   }
-  std::vector<std::uint32_t> ids;
+  std::vector<PointRecord> kept, buffer(std::size_t(1) << 14);
   for (int z = from[2]; z <= to[2]; ++z)
     for (int y = from[1]; y <= to[1]; ++y)
       for (int x = from[0]; x <= to[0]; ++x) {
@@ -304,23 +416,26 @@ OrientedPoints gather(const OrientedPoints& all, const Bins& bins, const BrickPl
         const auto it = std::lower_bound(bins.bricks.begin(), bins.bricks.end(), cell);
         if (it == bins.bricks.end() || *it != cell) continue;
         const std::size_t c = std::size_t(it - bins.bricks.begin());
-        for (std::size_t k = bins.first[c]; k < bins.first[c + 1]; ++k) {
-          const Vec3d p = all.positions[bins.points[k]].cast<double>();
-          if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) ids.push_back(bins.points[k]);
+        for (std::size_t k = bins.first[c]; k < bins.first[c + 1];) {
+          const std::size_t want = std::min(buffer.size(), bins.first[c + 1] - k);
+          const ssize_t got = ::pread(bins.fd, buffer.data(), want * sizeof(PointRecord), off_t(k * sizeof(PointRecord)));
+          if (got < 0 && errno == EINTR) continue;
+          if (got <= 0 || std::size_t(got) % sizeof(PointRecord) != 0)
+            throw InputError(bins.path, "cannot read the binned points back: " +
+                                            std::string(got < 0 ? std::strerror(errno) : "the file is short"));
+          const std::size_t records = std::size_t(got) / sizeof(PointRecord);
+          for (std::size_t j = 0; j < records; ++j) {
+            const Vec3d p = buffer[j].position.cast<double>();
+            if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) kept.push_back(buffer[j]);
+          }
+          k += records;
         }
       }
-  std::sort(ids.begin(), ids.end());
+  std::sort(kept.begin(), kept.end(), [](const PointRecord& a, const PointRecord& b) { return a.index < b.index; });
   OrientedPoints p;
-  auto take = [&](const auto& from_values, auto* to_values) {
-    if (from_values.size() != all.size()) return;
-    to_values->resize(ids.size());
-    for (std::size_t i = 0; i < ids.size(); ++i) (*to_values)[i] = from_values[ids[i]];
-  };
-  take(all.positions, &p.positions);
-  take(all.normals, &p.normals);
-  take(all.colors, &p.colors);
-  take(all.confidence, &p.confidence);
-  take(all.spacing, &p.spacing);
+  p.positions.reserve(kept.size());
+  p.normals.reserve(kept.size());
+  append_records(kept.data(), kept.size(), bins.census, &p);
   return p;
 }
 
@@ -363,10 +478,10 @@ std::string brick_path(const std::string& dir, std::uint32_t brick) {
 // suffices. `far`: no point outside reaches farther into the brick. Returns
 // the runs it took.
 template <class Work>
-std::size_t with_brick_points(const OrientedPoints& all, const Bins& bins, const BrickPlan& plan,
-                              std::uint32_t brick, double halo, double far, Work work, double* widest) {
+std::size_t with_brick_points(const Bins& bins, const BrickPlan& plan, std::uint32_t brick, double halo, double far,
+                              Work work, double* widest) {
   for (std::size_t runs = 1;; ++runs) {
-    const OrientedPoints sub = gather(all, bins, plan, brick, halo);
+    const OrientedPoints sub = gather(bins, plan, brick, halo);
     *widest = std::max(*widest, halo);
     if (sub.size() == 0 && halo < far) {
       halo = std::min(far, 2 * halo);
@@ -380,24 +495,35 @@ std::size_t with_brick_points(const OrientedPoints& all, const Bins& bins, const
 
 }  // namespace
 
-BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& options, const BrickOptions& bricks) {
-  if (points.size() == 0) throw InputError("", "no input points: nothing to reconstruct");
-  if (points.size() >= (std::size_t(1) << 32))
-    throw InputError("", "more than 2^32 points in one build: split the input");
+namespace {
+
+PointSource source_of(const OrientedPoints& points) {
+  return {census_of(points), [&points](const RecordVisitor& visit) { for_each_record(points, visit); }};
+}
+
+PointSource source_of(const PointSpool& spool) {
+  return {spool.census(), [&spool](const RecordVisitor& visit) { spool.for_each(visit); }};
+}
+
+BrickPlan plan_for(const PointSource& points, const ReconstructOptions& options, const BrickOptions& bricks) {
+  const std::size_t count = points.census.count;
+  if (count == 0) throw InputError("", "no input points: nothing to reconstruct");
+  if (count >= (std::size_t(1) << 32)) throw InputError("", "more than 2^32 points in one build: split the input");
   BrickPlan plan;
-  plan.grid = make_cube_grid(bounds(points.positions), options.resolution);
+  plan.grid = make_cube_grid(points.census.box, options.resolution);
   const int R = options.resolution;
   plan.halo = base_halo(options, plan.grid.cube_size);
   const int halo_cubes = int(std::ceil(plan.halo / plan.grid.cube_size));
   const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
-  const ReconstructionEstimate whole = estimate_reconstruction(points, R, threads);
   const double budget = bricks.memory_bytes > 0 ? bricks.memory_bytes : machine_memory_bytes();
   const int smallest = std::min(R, std::max(16, 1 << int(std::ceil(std::log2(4.0 * halo_cubes)))));
+  const PointSurvey survey_ = survey(points, plan.grid, std::min(smallest, bricks.brick_cubes > 0 ? bricks.brick_cubes : R),
+                                     threads);
+  const ReconstructionEstimate& whole = survey_.whole;
   auto brick_bytes = [&](int B) {
-    const int n = (R + B - 1) / B;
-    const double share = double(largest_brick(points, plan.grid, B, n)) / double(points.size());
+    const double share = double(survey_.largest(B)) / double(count);
     const double grown = std::pow(double(B + 2 * halo_cubes) / double(B), 2.0);
-    return reconstruction_bytes(share * grown * double(points.size()), share * whole.cubes);
+    return reconstruction_bytes(share * grown * double(count), share * whole.cubes);
   };
   int B = bricks.brick_cubes;
   if (B > 0) {
@@ -420,26 +546,28 @@ BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& op
                              " in core, and more than 2^32 bricks of " + std::to_string(B) +
                              " cubes: choose a coarser --resolution");
   plan.brick_bytes = brick_bytes(B);
-  plan.weld_bytes = kWeldBytesPerCube * whole.cubes + 40.0 * double(points.size());
-  plan.disk_bytes = kDiskBytesPerCube * whole.cubes;
+  plan.weld_bytes = kWeldBytesPerCube * whole.cubes;
+  plan.disk_bytes = kDiskBytesPerCube * whole.cubes + double(sizeof(PointRecord)) * double(count);
   plan.cubes = whole.cubes;
-  plan.key = plan_key(points, options, B);
+  plan.estimated_bytes = whole.bytes;
+  plan.median_spacing = survey_.median_spacing;
+  plan.key = plan_key(points.census, options, B);
   return plan;
 }
 
-Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const ReconstructOptions& options,
-                                     const BrickOptions& brick_options, BrickStats* stats_out,
-                                     const BrickPlan* given_plan) {
+Reconstruction bricks_from(const PointSource& points, const ReconstructOptions& options,
+                           const BrickOptions& brick_options, BrickStats* stats_out, const BrickPlan* given_plan) {
   Stopwatch watch;
   auto lap = [&watch] { return watch.lap(); };
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!points.positions[i].allFinite() || !points.normals[i].allFinite())
-      throw InputError("", "input point " + std::to_string(i) + " has non-finite coordinates or normal");
-  const BrickPlan plan = given_plan ? *given_plan : plan_bricks(points, options, brick_options);
+  const BrickPlan plan = given_plan ? *given_plan : plan_for(points, options, brick_options);
   Reconstruction result;
   ReconstructStats& stats = result.stats;
-  stats.points = points.size();
-  const std::string advice = coarse_input_advice(points, options.resolution);
+  stats.points = points.census.count;
+  const std::string advice =
+      points.census.spacing
+          ? coarse_input_advice(plan.median_spacing, points.census.box.extent().cast<double>().maxCoeff(),
+                                options.resolution)
+          : "";
   if (!advice.empty()) result.warnings.push_back(advice);
 
   // Room for the bricks, checked before the work folder is made.
@@ -459,7 +587,9 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
   for (const auto& entry : fs::directory_iterator(dir, ec))
     if (entry.path().filename().string().rfind(".tmp-", 0) == 0) fs::remove(entry.path(), ec);
 
-  const Bins bins = bin_points(points, plan, options);
+  Bins bins;
+  bin_points(points, plan, options, (fs::path(brick_options.work_dir) / "points.bins").string(), &bins);
+  if (brick_options.points_binned) brick_options.points_binned();
 
   stats.seconds_index = lap();
 
@@ -485,7 +615,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
             bricks[std::uint32_t((dz * n + dy) * n + dx)].pending = true;
     }
   BrickStats bs;
-  const double cubes_per_point = plan.cubes / double(points.size());
+  const double cubes_per_point = plan.cubes / double(points.census.count);
   Progress progress("bricks", bricks.size());
   for (;;) {
     bool ran = false;
@@ -504,7 +634,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
         // The base halo first; where a value needs more (points of wide
         // spacing nearby), again with what it needs.
         file.followed = state.wanted;
-        bs.brick_runs += with_brick_points(points, bins, plan, brick, plan.halo, bins.far(brick),
+        bs.brick_runs += with_brick_points(bins, plan, brick, plan.halo, bins.far(brick),
                                            [&](const OrientedPoints& sub) {
           file.surface = reconstruct_brick(sub, plan.grid, region_of(plan, brick), file.followed,
                                            cubes_per_point * double(sub.size()), bins.far(brick), options);
@@ -581,7 +711,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
         unpack_key(corners[i], &x, &y, &z);
         queries.push_back(plan.grid.corner_position(x, y, z));
       }
-      with_brick_points(points, bins, plan, brick, relaxed_halo, bins.relaxed_far(brick),
+      with_brick_points(bins, plan, brick, relaxed_halo, bins.relaxed_far(brick),
                         [&](const OrientedPoints& sub) {
         if (sub.size() == 0) return 0.0;
         const PointIndex index(sub);
@@ -618,7 +748,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
     stats.patch_triangles = patch.size();
   }
   // Colours of the vertices growth added, from the points of their brick.
-  if (points.has_colors() && !grown_vertices.empty()) {
+  if (points.census.colors && !grown_vertices.empty()) {
     std::map<std::uint32_t, std::vector<std::int32_t>> by_brick;
     for (std::int32_t v : grown_vertices)
       by_brick[std::uint32_t(brick_of(plan.grid, plan.brick_cubes, plan.bricks_per_axis, mesh.positions[v],
@@ -626,7 +756,7 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
     for (const auto& [brick, members] : by_brick) {
       std::vector<Vec3f> at;
       for (std::int32_t v : members) at.push_back(mesh.positions[v]);
-      with_brick_points(points, bins, plan, brick, plan.halo, bins.far(brick), [&](const OrientedPoints& sub) {
+      with_brick_points(bins, plan, brick, plan.halo, bins.far(brick), [&](const OrientedPoints& sub) {
         if (sub.size() == 0) return 0.0;
         const PointIndex index(sub);
         std::vector<float> needed;
@@ -645,6 +775,26 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
   bs.bricks = bricks.size();
   if (stats_out) *stats_out = bs;
   return result;
+}
+
+}  // namespace
+
+BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& options, const BrickOptions& bricks) {
+  return plan_for(source_of(points), options, bricks);
+}
+
+BrickPlan plan_bricks(const PointSpool& points, const ReconstructOptions& options, const BrickOptions& bricks) {
+  return plan_for(source_of(points), options, bricks);
+}
+
+Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const ReconstructOptions& options,
+                                     const BrickOptions& bricks, BrickStats* stats, const BrickPlan* plan) {
+  return bricks_from(source_of(points), options, bricks, stats, plan);
+}
+
+Reconstruction reconstruct_in_bricks(const PointSpool& points, const ReconstructOptions& options,
+                                     const BrickOptions& bricks, BrickStats* stats, const BrickPlan* plan) {
+  return bricks_from(source_of(points), options, bricks, stats, plan);
 }
 
 }  // namespace scan2lod

@@ -12,7 +12,9 @@
 #pragma once
 
 #include "reconstruct/marching_cubes.h"
+#include "reconstruct/point_spool.h"
 
+#include <functional>
 #include <string>
 
 namespace scan2lod {
@@ -21,6 +23,9 @@ struct BrickOptions {
   std::string work_dir;      // finished bricks are kept here; created if missing
   double memory_bytes = 0;   // one brick's work must fit; 0: the machine's
   int brick_cubes = 0;       // cubes per brick side (a power of two); 0: from memory_bytes
+  // Called once the points are binned on disk: from there on the build reads
+  // them from the bins only, so a caller may free its own copy.
+  std::function<void()> points_binned;
 };
 
 struct BrickPlan {
@@ -32,7 +37,9 @@ struct BrickPlan {
   double cubes = 0;          // cubes the whole surface is expected to touch (estimate_reconstruction)
   double brick_bytes = 0;    // estimated peak of the largest brick
   double weld_bytes = 0;     // estimated peak of welding the surface
-  double disk_bytes = 0;     // estimated size of the finished bricks
+  double disk_bytes = 0;     // estimated size of the finished bricks and the binned points
+  double estimated_bytes = 0;  // the in-core reconstruction's estimate (estimate_reconstruction)
+  double median_spacing = 0; // of the points with spacing (sampled past 2^20 points); 0 without
   std::uint64_t key = 0;     // hash of the points and options: a brick of another plan is never reused
 };
 
@@ -40,6 +47,8 @@ struct BrickPlan {
 // Throws InputError when not even the smallest brick (4 halos wide) fits,
 // naming the memory it needs.
 BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& options, const BrickOptions& bricks);
+// The same for points spooled to disk (closed), read in passes.
+BrickPlan plan_bricks(const PointSpool& points, const ReconstructOptions& options, const BrickOptions& bricks);
 
 struct BrickStats {
   std::size_t bricks = 0;          // bricks with points
@@ -56,6 +65,11 @@ struct BrickStats {
 // build.
 // `plan`: plan_bricks(points, options, bricks), when the caller made it already.
 Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const ReconstructOptions& options,
+                                     const BrickOptions& bricks, BrickStats* stats = nullptr,
+                                     const BrickPlan* plan = nullptr);
+// The same for points spooled to disk: what the build holds of them at once
+// is one brick's with its halo, whatever their number.
+Reconstruction reconstruct_in_bricks(const PointSpool& points, const ReconstructOptions& options,
                                      const BrickOptions& bricks, BrickStats* stats = nullptr,
                                      const BrickPlan* plan = nullptr);
 

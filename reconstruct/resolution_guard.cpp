@@ -24,20 +24,6 @@ constexpr double kFixedBytes = 48.0 * 1024 * 1024;
 constexpr double kCoreSecondsPerCube = 12e-6;
 constexpr double kCoreSecondsPerPoint = 1.5e-6;
 
-// Occupied cells of the grid of `resolution` over the points.
-std::size_t occupied_cells(const std::vector<Vec3f>& positions, const CubeGrid& grid) {
-  std::vector<std::uint64_t> keys(positions.size());
-  const int R = grid.resolution;
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    const Vec3d g = (positions[i].cast<double>() - grid.origin) / grid.cube_size;
-    int c[3];
-    for (int a = 0; a < 3; ++a) c[a] = std::clamp(int(std::floor(g[a])), 0, R - 1);
-    keys[i] = pack_key(c[0], c[1], c[2]);
-  }
-  std::sort(keys.begin(), keys.end());
-  return std::size_t(std::unique(keys.begin(), keys.end()) - keys.begin());
-}
-
 std::string gigabytes(double bytes) {
   char text[32];
   std::snprintf(text, sizeof text, bytes >= 1e9 ? "%.1f GB" : "%.0f MB", bytes >= 1e9 ? bytes / 1e9 : bytes / 1e6);
@@ -67,26 +53,51 @@ double reconstruction_bytes(double points, double cubes) {
   return kFixedBytes + kBytesPerPoint * points + kBytesPerCube * cubes;
 }
 
-ReconstructionEstimate estimate_reconstruction(const OrientedPoints& points, int resolution, int threads) {
+CoarseOccupancy::CoarseOccupancy(const Aabb& box) {
+  for (int coarse = 64; coarse >= kMinResolution; coarse /= 2) {
+    Level level;
+    level.grid = make_cube_grid(box, coarse);
+    level.bits.assign((std::size_t(coarse) * coarse * coarse + 63) / 64, 0);
+    levels_.push_back(std::move(level));
+  }
+}
+
+void CoarseOccupancy::add(const Vec3f& p) {
+  for (Level& level : levels_) {
+    const int R = level.grid.resolution;
+    const Vec3d g = (p.cast<double>() - level.grid.origin) / level.grid.cube_size;
+    std::size_t c[3];
+    for (int a = 0; a < 3; ++a) c[a] = std::size_t(std::clamp(int(std::floor(g[a])), 0, R - 1));
+    const std::size_t cell = (c[2] * R + c[1]) * R + c[0];
+    std::uint64_t& word = level.bits[cell / 64];
+    const std::uint64_t bit = std::uint64_t(1) << (cell % 64);
+    level.cells += (word & bit) == 0;
+    word |= bit;
+  }
+}
+
+ReconstructionEstimate CoarseOccupancy::estimate(std::size_t points, int resolution, int threads) const {
   ReconstructionEstimate e;
   e.resolution = resolution;
-  if (points.size() == 0) return e;
-  const Aabb box = bounds(points.positions);
+  if (points == 0) return e;
   // The coarse grid must be sampled densely enough to show the whole surface:
   // a few points per occupied cell, else a coarser one.
-  int coarse = 64;
-  std::size_t cells = 0;
-  for (;; coarse /= 2) {
-    cells = occupied_cells(points.positions, make_cube_grid(box, coarse));
-    if (coarse == kMinResolution || double(points.size()) >= 4.0 * double(cells)) break;
-  }
-  const double scale = double(resolution - 8) / double(coarse - 8);
-  e.cubes = kCubesPerCoarseCell * double(cells) * scale * scale;
-  const double n = double(points.size());
+  std::size_t l = 0;
+  while (l + 1 < levels_.size() && double(points) < 4.0 * double(levels_[l].cells)) ++l;
+  const double scale = double(resolution - 8) / double(levels_[l].grid.resolution - 8);
+  e.cubes = kCubesPerCoarseCell * double(levels_[l].cells) * scale * scale;
+  const double n = double(points);
   e.bytes = reconstruction_bytes(n, e.cubes);
   const int cores = threads > 0 ? threads : omp_get_max_threads();
   e.seconds = (kCoreSecondsPerCube * e.cubes + kCoreSecondsPerPoint * n) / std::max(1, cores);
   return e;
+}
+
+ReconstructionEstimate estimate_reconstruction(const OrientedPoints& points, int resolution, int threads) {
+  if (points.size() == 0) return ReconstructionEstimate{resolution};
+  CoarseOccupancy occupancy(bounds(points.positions));
+  for (const Vec3f& p : points.positions) occupancy.add(p);
+  return occupancy.estimate(points.size(), resolution, threads);
 }
 
 double machine_memory_bytes() {
@@ -136,8 +147,11 @@ std::string coarse_input_advice(const OrientedPoints& points, int resolution) {
   if (points.spacing.size() != points.size() || points.size() == 0) return "";
   std::vector<float> spacing = points.spacing;
   std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
-  const double median = spacing[spacing.size() / 2];
-  const double extent = bounds(points.positions).extent().cast<double>().maxCoeff();
+  return coarse_input_advice(spacing[spacing.size() / 2], bounds(points.positions).extent().cast<double>().maxCoeff(),
+                             resolution);
+}
+
+std::string coarse_input_advice(double median, double extent, int resolution) {
   const double cube = extent / double(resolution - 8);
   // Vertices more than 4 cubes apart: the cubes between them only re-sample flat triangles.
   if (!(median > 4.0 * cube)) return "";

@@ -5,9 +5,12 @@
 #pragma once
 
 #include "core/types.h"
+#include "reconstruct/cube_grid.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace scan2lod {
 
@@ -23,6 +26,24 @@ struct ReconstructionEstimate {
 // @param[in] threads     cores the work is spread over (0: all)
 // Costs O(#points) time and memory, whatever R.
 ReconstructionEstimate estimate_reconstruction(const OrientedPoints& points, int resolution, int threads = 0);
+
+// The points' occupancy of the coarse grids the estimate reads the area off,
+// taken as points stream by (a spool too large for memory).
+class CoarseOccupancy {
+ public:
+  explicit CoarseOccupancy(const Aabb& box);
+  void add(const Vec3f& p);
+  // The estimate for `points` points (all of them added).
+  ReconstructionEstimate estimate(std::size_t points, int resolution, int threads = 0) const;
+
+ private:
+  struct Level {
+    CubeGrid grid;
+    std::vector<std::uint64_t> bits;  // a bit per cell: some point lies in it
+    std::size_t cells = 0;
+  };
+  std::vector<Level> levels_;  // the coarse grids, finest first
+};
 
 // Peak bytes of marching cubes over `cubes` touched cubes from `points` points
 // (the model behind estimate_reconstruction, for a brick of the grid).
@@ -49,5 +70,7 @@ ReconstructionEstimate check_resolution_fits(const OrientedPoints& points, int r
 // at great cost: a 453-vertex mesh at R = 256 gives half a million triangles.
 // Returns a warning naming the spacing and a resolution whose cubes match it, or "".
 std::string coarse_input_advice(const OrientedPoints& points, int resolution);
+// The same from the median spacing and the box's longest side.
+std::string coarse_input_advice(double median_spacing, double extent, int resolution);
 
 }  // namespace scan2lod

@@ -97,6 +97,41 @@ TEST(BrickReconstruction, BunnyInBricksIsTheInCoreSurface) {
   }
 }
 
+TEST(BrickReconstruction, PointsSpooledToDiskGiveTheInCoreSurface) {
+  // Scan by scan to a spool on disk, binned by brick there: no more than two
+  // scans' points are in memory at once, and the surface is the in-core one.
+  ReconstructOptions options;
+  options.resolution = 128;
+  const Reconstruction whole = reconstruct(bunny_points(), options);
+  BuildOptions build;
+  build.reconstruct = options;
+  build.octree = false;
+  build.strategy = BuildStrategy::kBricks;
+  build.brick_cubes = 32;
+  build.work_dir = (fresh_dir("spooled") / "work").string();
+  AcquisitionReport acquisition;
+  InputPoints points = load_within_budget({std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf"}, build,
+                                          &acquisition);
+  ASSERT_TRUE(points.spool);
+  EXPECT_EQ(points.points.size(), 0u);
+  EXPECT_EQ(points.size(), bunny_points().size());
+  EXPECT_EQ(acquisition.range_images, 10u);
+  const PointCensus census = points.spool->census();
+  EXPECT_EQ(census.hash, census_of(bunny_points()).hash);  // the records of the merged points, byte for byte
+  EXPECT_TRUE(census.spacing && census.confidence);
+  const std::string spool_path = points.spool->path();
+  EXPECT_TRUE(fs::exists(spool_path));
+  BuildReport report;
+  const Reconstruction parts = reconstruct_within_budget(&points, build, &report);
+  EXPECT_FALSE(points.spool);  // freed once binned
+  EXPECT_FALSE(fs::exists(spool_path));
+  EXPECT_TRUE(report.in_bricks);
+  EXPECT_GE(report.bricks.bricks, 8u);
+  EXPECT_EQ(parts.mesh.triangles.size(), whole.mesh.triangles.size());
+  EXPECT_LE(largest_move(parts.mesh, whole.mesh), 1e-6 * bounds(whole.mesh.positions).diagonal());
+  EXPECT_EQ(mesh_topology(parts.mesh).boundary_loops, mesh_topology(whole.mesh).boundary_loops);
+}
+
 TEST(BrickReconstruction, ScannedTorusInBricksIsTheInCoreSurfaceWithWideSpacings) {
   // Stray points of wide spacing (as a scan's grazing rim leaves) reach far:
   // the bricks near them widen their halo until every value is the whole
