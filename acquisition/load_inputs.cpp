@@ -7,6 +7,7 @@
 #include "acquisition/range_grid_ply.h"
 #include "core/error.h"
 #include "core/parallel_jobs.h"
+#include "core/progress.h"
 #include "io/mesh_file.h"
 
 #include <omp.h>
@@ -165,7 +166,7 @@ OrientedPoints read_job(const Job& job, const AcquisitionOptions& options, int t
 // Reads jobs [from, to) in parallel (one alone gets every core for its own
 // parallel work) and hands them to `take` in order.
 void read_jobs(const std::vector<Job>& jobs, std::size_t from, std::size_t to, const AcquisitionOptions& options,
-               AcquisitionReport* report, const std::function<void(OrientedPoints&&)>& take) {
+               AcquisitionReport* report, Progress* progress, const std::function<void(OrientedPoints&&)>& take) {
   const std::size_t count = to - from;
   std::vector<OrientedPoints> parts(count);
   std::vector<std::uint8_t> estimated(count, 0);
@@ -175,8 +176,8 @@ void read_jobs(const std::vector<Job>& jobs, std::size_t from, std::size_t to, c
     parts[i] = read_job(jobs[from + i], options, threads, &e, &warnings[i]);
     estimated[i] = e;
   };
-  if (count == 1) read(0, options.threads);
-  else parallel_jobs(count, options.threads, "reading inputs", [&](std::size_t i) { read(i, 1); });
+  if (count == 1) read(0, options.threads), progress->advance();
+  else parallel_jobs(count, options.threads, progress, [&](std::size_t i) { read(i, 1); });
   for (std::size_t i = 0; i < count; ++i) {
     const Job& job = jobs[from + i];
     if (parts[i].size() == 0)
@@ -199,7 +200,10 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
   // Files are independent: read and orient them in parallel, merge in order.
   std::vector<OrientedPoints> parts;
   AcquisitionReport local;
-  read_jobs(jobs, 0, jobs.size(), options, &local, [&](OrientedPoints&& part) { parts.push_back(std::move(part)); });
+  Progress progress("reading inputs", jobs.size());
+  read_jobs(jobs, 0, jobs.size(), options, &local, &progress,
+            [&](OrientedPoints&& part) { parts.push_back(std::move(part)); });
+  progress.finish();
   OrientedPoints points = merge_parts(&parts);
   if (report) *report = std::move(local);
   return points;
@@ -236,8 +240,10 @@ void stream_oriented_points(const std::vector<std::string>& inputs, const Acquis
   r = AcquisitionReport();
   // As many files at once as there are cores: in memory are those only.
   const std::size_t window = std::size_t(std::max(1, options.threads > 0 ? options.threads : omp_get_max_threads()));
+  Progress progress("reading inputs", jobs.size());
   for (std::size_t from = 0; from < jobs.size(); from += window)
-    read_jobs(jobs, from, std::min(jobs.size(), from + window), options, &r, take);
+    read_jobs(jobs, from, std::min(jobs.size(), from + window), options, &r, &progress, take);
+  progress.finish();
 }
 
 }  // namespace scan2lod

@@ -9,10 +9,8 @@
 
 namespace scan2lod {
 
-void parallel_jobs(std::size_t count, int threads, const char* label,
-                   const std::function<void(std::size_t)>& work) {
+void parallel_jobs(std::size_t count, int threads, Progress* progress, const std::function<void(std::size_t)>& work) {
   std::vector<std::exception_ptr> errors(count);
-  Progress progress(label, count);
 #pragma omp parallel for schedule(dynamic) num_threads(threads > 0 ? threads : omp_get_max_threads())
   for (std::size_t i = 0; i < count; ++i) {
     try {
@@ -20,11 +18,17 @@ void parallel_jobs(std::size_t count, int threads, const char* label,
     } catch (...) {
       errors[i] = std::current_exception();
     }
-    progress.advance();
+    progress->advance();
   }
-  progress.finish();
   for (const auto& e : errors)
     if (e) std::rethrow_exception(e);
+}
+
+void parallel_jobs(std::size_t count, int threads, const char* label,
+                   const std::function<void(std::size_t)>& work) {
+  Progress progress(label, count);
+  parallel_jobs(count, threads, &progress, work);
+  progress.finish();
 }
 
 }  // namespace scan2lod

@@ -12,5 +12,8 @@ namespace scan2lod {
 // lowest-numbered failed job, if any, is rethrown.
 void parallel_jobs(std::size_t count, int threads, const char* label,
                    const std::function<void(std::size_t)>& work);
+// The same, advancing `progress` (a stage of more jobs than these) instead.
+class Progress;
+void parallel_jobs(std::size_t count, int threads, Progress* progress, const std::function<void(std::size_t)>& work);
 
 }  // namespace scan2lod

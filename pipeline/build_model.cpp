@@ -195,7 +195,7 @@ namespace {
 // big build holds).
 LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool, const TriangleMesh* mesh,
                            const BuildOptions& options, BuildReport* report_out, const std::string& source,
-                           const std::function<void()>& release) {
+                           const std::function<void()>& release, BuildProgress* outer = nullptr) {
   if (!options.octree && !options.clusters) throw InputError("", "no LOD structure asked for");
   BuildReport local;
   BuildReport& report = report_out ? *report_out : local;
@@ -203,7 +203,10 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
   report.mesh_input = mesh != nullptr;
   const bool reconstructs = options.octree || !mesh;
   // One progress for the whole build (reconstruction-relative shares).
-  BuildProgress progress(options.octree ? 4.0 : 0.0, options.clusters ? (reconstructs ? 1.6 : 1.0) : 0.0);
+  std::unique_ptr<BuildProgress> own;
+  if (!outer) own = std::make_unique<BuildProgress>(0.0, options.octree ? 4.0 : 0.0,
+                                                    options.clusters ? (reconstructs ? 1.6 : 1.0) : 0.0);
+  BuildProgress& progress = outer ? *outer : *own;
   auto stage = Clock::now();
   Reconstruction r;
   if (reconstructs) {
@@ -284,6 +287,7 @@ LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions&
   BuildReport local;
   BuildReport& report = report_out ? *report_out : local;
   const auto start = Clock::now();
+  BuildProgress progress(0.05, options.octree ? 4.0 : 0.0, options.clusters ? 1.6 : 0.0);
   InputPoints points = load_within_budget(inputs, options, &report.acquisition);
   report.warnings = report.acquisition.warnings;
   report.mesh_input = report.acquisition.meshes == 1 && report.acquisition.files.size() == 1;
@@ -299,7 +303,8 @@ LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions&
                                      [&points] {
                                        points.points = OrientedPoints();
                                        points.spool.reset();
-                                     });
+                                     },
+                                     &progress);
   report.acquisition = acquisition;
   report.seconds_read = read;
   return model;

@@ -4,18 +4,19 @@
 
 namespace scan2lod {
 
-BuildProgress::BuildProgress(double octree, double clusters) : outer_(progress_sink()) {
+BuildProgress::BuildProgress(double reading, double octree, double clusters) : outer_(progress_sink()) {
   if (!outer_) return;
-  const double total = 1.0 + octree + clusters;
-  const double r = 1.0 / total;
+  const double total = reading + 1.0 + octree + clusters;
+  const double r = 1.0 / total, r0 = reading / total;
+  spans_["reading inputs"] = {0.0, r0};
   // Within the reconstruction: distances are most of it, in core or in bricks.
-  spans_["signed distances"] = {0.0, 0.75 * r};
-  spans_["marching cubes"] = {0.75 * r, 0.1 * r};
-  spans_["pieces and holes"] = {0.85 * r, 0.15 * r};
-  spans_["bricks"] = {0.0, 0.85 * r};
-  octree_start_ = r;
+  spans_["signed distances"] = {r0, 0.75 * r};
+  spans_["marching cubes"] = {r0 + 0.75 * r, 0.1 * r};
+  spans_["pieces and holes"] = {r0 + 0.85 * r, 0.15 * r};
+  spans_["bricks"] = {r0, 0.85 * r};
+  octree_start_ = r0 + r;
   octree_size_ = octree / total;
-  spans_["clusters"] = {r + octree_size_, clusters / total};
+  spans_["clusters"] = {r0 + r + octree_size_, clusters / total};
   set_progress_sink([this](const std::string& label, double fraction, bool) {
     const auto it = spans_.find(label);
     if (it != spans_.end()) report(it->second.start + fraction * it->second.size);
