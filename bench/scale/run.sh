@@ -11,13 +11,21 @@
 # build's at 10 k and 50 k triangles: the two-sided mean distance of each
 # cut to the in-core full detail, bricks over core.
 #
-#   bench/scale/run.sh [--build DIR] [--write] [--sizes "M:V:S:R ..."] [--memory 400M] [--shared DIR]
+# Each row also gives the brick build's own cut errors at 10 k and 50 k
+# triangles (to its full detail, in 1e-4 of the diagonal), so that rows of
+# one shape at growing sizes can be compared, bricks-only rows included.
+#
+#   bench/scale/run.sh [--build DIR] [--write] [--sizes "M:V:S:R[:MEM[:bricks]] ..."] [--memory 400M] [--shared DIR]
 #
 #   --sizes   mesh:views:size:resolution per row, mesh "bunny" (bun_zipper.ply)
 #             or "pair" (two bunnies side by side: a long scan set, like the
 #             Happy Buddha's, whose R = 1024 surface has about 3.3 M triangles
 #             from 1 M points); default "pair:16:560:1024 bunny:16:480:1024
-#             bunny:32:680:2048": about 1, 1 and 4 M points
+#             bunny:32:680:2048": about 1, 1 and 4 M points. A fifth field is
+#             the row's budget (else --memory); a sixth, "bricks", skips the
+#             in-core build (10^8 points do not fit in core here).
+#             The growth table: "pair:16:560:1024:400M pair:32:1230:2048:1G
+#             pair:96:2250:4096:4G:bricks" (10^6, 10^7, 10^8 points)
 #   --memory  the budget of the brick builds (default 400M)
 #   --write   also write bench/scale/REPORT.md
 set -euo pipefail
@@ -71,54 +79,77 @@ with open(sys.argv[2], "w") as out:
         for t in f: out.write("3 %d %d %d\n" % tuple(int(i) + k * nv for i in t))
 EOF
 
-# cut_ratio TRIANGLES: the brick build's cut error over the in-core one's
-cut_ratio() {
-  local t="$1" e=()
-  for m in core bricks; do
-    # A hierarchy whose coarsest cut is above t has no such cut: "-".
-    "$binary" extract "$work/$m.mco" --triangles "$t" -o "$work/cut.ply" --quiet 2>/dev/null || { echo "-"; return; }
-    e+=("$("$binary" compare "$work/cut.ply" "$work/full.ply" --json --samples 200000 |
-           python3 -c 'import json,sys; j=json.load(sys.stdin); print((j["a_to_b"]["mean"]+j["b_to_a"]["mean"])/2)')")
-  done
-  python3 -c "print('%.2f' % (${e[1]} / ${e[0]}))"
+# cut_error MODEL TRIANGLES: the cut's two-sided mean distance to full.ply and the diagonal, or "-"
+cut_error() {
+  # A hierarchy whose coarsest cut is above t has no such cut: "-".
+  "$binary" extract "$1" --triangles "$2" -o "$work/cut.ply" --quiet 2>/dev/null || { echo "-"; return; }
+  "$binary" compare "$work/cut.ply" "$work/full.ply" --json --samples 200000 |
+    python3 -c 'import json,sys; j=json.load(sys.stdin); print((j["a_to_b"]["mean"]+j["b_to_a"]["mean"])/2, j["diagonal"])'
 }
 
 rows=()
 for size in $sizes; do
-  IFS=: read -r shape views pixels resolution <<< "$size"
+  IFS=: read -r shape views pixels resolution budget mode <<< "$size"
+  budget="${budget:-$memory}"
   scans="$work/scans_$views"
   mkdir -p "$scans"
   source_mesh="$mesh"
   [[ "$shape" == pair ]] && source_mesh="$work/pair.ply"
   "$binary" scan "$source_mesh" -o "$scans" --views "$views" --size "${pixels}x${pixels}" --quiet
-  echo "scale: $views views of ${pixels}^2 at R = $resolution: in core" >&2
-  run core "$scans/scans.conf" -r "$resolution" -o "$work/core.mco"
-  echo "scale: ... in bricks (--memory $memory)" >&2
-  run bricks "$scans/scans.conf" -r "$resolution" -o "$work/bricks.mco" --memory "$memory" --work-dir "$work/w"
-  disk=$(du -sb "$work/w" | cut -f1)
-  "$binary" extract "$work/core.mco" --percent 100 -o "$work/full.ply" --quiet
-  cuts="$(cut_ratio 10000) / $(cut_ratio 50000)"
-  rows+=("$(python3 - "$work" "$disk" "$resolution" "$shape" "$cuts" <<'EOF'
-import json, sys
-work, disk, R, shape, cuts = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5]
+  if [[ "$mode" != bricks ]]; then
+    echo "scale: $views views of ${pixels}^2 at R = $resolution: in core" >&2
+    run core "$scans/scans.conf" -r "$resolution" -o "$work/core.mco"
+  fi
+  echo "scale: $views views of ${pixels}^2 at R = $resolution: in bricks (--memory $budget)" >&2
+  # The work folder at its largest: sampled while the build runs.
+  ( peak=0; while sleep 2; do d=$(du -sb "$work/w" 2>/dev/null | cut -f1); (( ${d:-0} > peak )) && peak=$d; echo "$peak" > "$work/disk"; done ) &
+  sampler=$!
+  run bricks "$scans/scans.conf" -r "$resolution" -o "$work/bricks.mco" --memory "$budget" --work-dir "$work/w"
+  kill "$sampler" 2>/dev/null; wait "$sampler" 2>/dev/null || true
+  disk=$(cat "$work/disk" 2>/dev/null || echo 0)
+  rm -rf "$scans"
+  reference=core
+  [[ "$mode" == bricks ]] && reference=bricks
+  "$binary" extract "$work/$reference.mco" --percent 100 -o "$work/full.ply" --quiet
+  errors=()
+  for m in core bricks; do
+    for t in 10000 50000; do
+      if [[ -f "$work/$m.mco" ]]; then errors+=("$(cut_error "$work/$m.mco" "$t")"); else errors+=("-"); fi
+    done
+  done
+  rows+=("$(python3 - "$work" "$disk" "$resolution" "$shape" "$budget" "${errors[@]}" <<'EOF'
+import json, os, sys
+work, disk, R, shape, budget = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5]
+err = [None if e == "-" else tuple(map(float, e.split())) for e in sys.argv[6:10]]
 def load(name):
+    if not os.path.exists(f"{work}/{name}.json"): return None, None, None
     j = json.load(open(f"{work}/{name}.json"))
     wall, kb = open(f"{work}/{name}.time").read().split()
     return j, float(wall), int(kb) / 1024
 c, cw, cm = load("core")
 b, bw, bm = load("bricks")
-p = c["points"]
-tri = c["clusters"]["full_triangles"]
-cs, bs = c["seconds"], b["seconds"]
+p = b["points"]
+tri = b["clusters"]["full_triangles"]
+bs = b["seconds"]
 br = b.get("bricks", {})
-print(f"| {shape} | {p/1e6:.2f} M | {R} | {tri/1e6:.2f} M | {b['clusters']['full_triangles'] == tri} "
-      f"| {cw:.1f} / {cm:.0f} | {bw:.1f} / {bm:.0f} | {br.get('bricks', '-')} of {br.get('brick_cubes', '-')} "
-      f"| {b.get('cluster_block', 0)/1e3:.0f} k | {cuts} "
-      f"| {disk/2**20:.0f} | {cs['reconstruct']:.1f} / {bs['reconstruct']:.1f} | {cs['clusters']:.1f} / {bs['clusters']:.1f} "
-      f"| {p/cw/1e3:.0f} k / {p/bw/1e3:.0f} k | {bw/cw:.2f} | {tri/bs['clusters']/2e3:.0f} k |")
+def ratio(i):  # bricks over core at one cut
+    return "-" if err[i] is None or err[i + 2] is None else "%.2f" % (err[i + 2][0] / err[i][0])
+def own(i):
+    return "-" if err[i + 2] is None else "%.1f" % (1e4 * err[i + 2][0] / err[i + 2][1])
+same = "-" if c is None else str(c["clusters"]["full_triangles"] == tri)
+core = "-" if c is None else f"{cw:.1f} / {cm:.0f}"
+core_r = "-" if c is None else f"{c['seconds']['reconstruct']:.1f}"
+core_c = "-" if c is None else f"{c['seconds']['clusters']:.1f}"
+core_t = "-" if c is None else f"{p/cw/1e3:.0f} k"
+ratio_t = "-" if c is None else f"{bw/cw:.2f}"
+print(f"| {shape} | {p/1e6:.2f} M | {R} | {tri/1e6:.2f} M | {same} | {budget} "
+      f"| {core} | {bw:.1f} / {bm:.0f} | {br.get('bricks', '-')} of {br.get('brick_cubes', '-')} "
+      f"| {b.get('cluster_block', 0)/1e3:.0f} k | {ratio(0)} / {ratio(1)} | {own(0)} / {own(1)} "
+      f"| {disk/2**20:.0f} | {core_r} / {bs['reconstruct']:.1f} | {core_c} / {bs['clusters']:.1f} "
+      f"| {core_t} / {p/bw/1e3:.0f} k | {ratio_t} | {tri/bs['clusters']/2e3:.0f} k |")
 EOF
 )")
-  rm -rf "$work/w" "$scans" "$work"/*.mco "$work"/cut.ply "$work"/full.ply
+  rm -rf "$work/w" "$work"/*.mco "$work"/*.json "$work"/*.time "$work"/cut.ply "$work"/full.ply "$work/disk"
 done
 
 {
@@ -130,16 +161,18 @@ done
   echo "Source: $(git -C "$repo" rev-parse --short HEAD) (at run time)"
   echo
   echo "Inputs: \`scan2lod scan\` (views × size² range images) of \`bun_zipper.ply\` or of two copies side by side (*pair*), built with"
-  echo "\`scan2lod build SCANS.conf -r R --structure clusters --json\`, in core and with \`--memory $memory\`."
-  echo "Wall time and peak RSS from \`/usr/bin/time\`; disk: the work folder's bricks at the end."
+  echo "\`scan2lod build SCANS.conf -r R --structure clusters --json\`, in core and with \`--memory\` the row's budget."
+  echo "Wall time and peak RSS from \`/usr/bin/time\`; disk: the work folder at its largest (sampled every 2 s)."
   echo "*same*: the brick build's full detail has the in-core triangle count (the tests check the triangles"
   echo "themselves). Throughput: input points per second of the whole build. *clusters/core*: triangles"
   echo "per second per core of the cluster stage (2 cores). *blocks*: triangles per block of the cluster"
   echo "hierarchy in the brick build (0: in core). *cuts*: the brick build's cut error over the in-core"
-  echo "build's at 10 k / 50 k triangles (two-sided mean distance to the in-core full detail, 200 k samples)."
+  echo "build's at 10 k / 50 k triangles (two-sided mean distance to the in-core full detail, 200 k samples);"
+  echo "*own cut error*: the brick build's, in 1e-4 of the diagonal (to the in-core full detail, or its own"
+  echo "in bricks-only rows). \"-\": not run (bricks-only rows), or no cut that small."
   echo
-  echo "| scans of | points | R | triangles | same | in core: s / MiB | bricks: s / MiB | bricks of cubes | blocks | cuts 10 k / 50 k | disk MiB | reconstruct s (core / bricks) | clusters s (core / bricks) | points/s (core / bricks) | bricks ÷ core time | clusters/core |"
-  echo "|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
+  echo "| scans of | points | R | triangles | same | budget | in core: s / MiB | bricks: s / MiB | bricks of cubes | blocks | cuts 10 k / 50 k | own cut error 10 k / 50 k | disk MiB | reconstruct s (core / bricks) | clusters s (core / bricks) | points/s (core / bricks) | bricks ÷ core time | clusters/core |"
+  echo "|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
   for row in "${rows[@]}"; do echo "$row"; done
 } > "$work/report.md"
 cat "$work/report.md"
