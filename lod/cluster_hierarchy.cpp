@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <thread>
@@ -184,6 +185,8 @@ void split_group(ArrayView<Vec3f> positions, int cluster_triangles, SplitGroup* 
 // core (meshlets never cross runs). One meshlet walk over 7.2 M triangles took
 // 8.3 s of a 25 s hierarchy, on one core.
 constexpr std::size_t kSplitRun = std::size_t(1) << 20;
+// Below this a run is not worth a core of its own.
+constexpr std::size_t kSmallestRun = std::size_t(1) << 16;
 
 // Runs work(i) for i in [0, count) on `threads` threads.
 template <class Work>
@@ -196,6 +199,32 @@ void on_threads(std::size_t count, int threads, Work work) {
   for (int t = 1; t < threads; ++t) pool.emplace_back(run);
   run();
   for (std::thread& t : pool) t.join();
+}
+
+// Triangles cut into clusters run by run, each run [starts[r], starts[r + 1])
+// on its own core; meshlets never cross runs.
+SplitGroup split_runs(ArrayView<Vec3f> positions, const std::vector<std::size_t>& starts, int cluster_triangles,
+                      int threads, const std::function<const Triangle&(std::size_t)>& triangle) {
+  const std::size_t runs = starts.size() - 1;
+  std::vector<SplitGroup> parts(runs);
+  on_threads(runs, threads, [&](std::size_t r) {
+    std::vector<Triangle>& own = parts[r].simplified.triangles;
+    own.reserve(starts[r + 1] - starts[r]);
+    for (std::size_t i = starts[r]; i < starts[r + 1]; ++i) own.push_back(triangle(i));
+    split_group(positions, cluster_triangles, &parts[r]);
+  });
+  SplitGroup full;
+  full.parts = 0;
+  full.simplified.triangles.reserve(starts.back() - starts.front());
+  full.part.reserve(starts.back() - starts.front());
+  for (SplitGroup& p : parts) {
+    full.simplified.triangles.insert(full.simplified.triangles.end(), p.simplified.triangles.begin(),
+                                     p.simplified.triangles.end());
+    for (std::int32_t id : p.part) full.part.push_back(id + full.parts);
+    full.parts += p.parts;
+    p = SplitGroup();
+  }
+  return full;
 }
 
 SplitGroup split_large_mesh(ArrayView<Vec3f> positions, const std::vector<Triangle>& triangles,
@@ -212,25 +241,10 @@ SplitGroup split_large_mesh(ArrayView<Vec3f> positions, const std::vector<Triang
   }
   std::sort(order.begin(), order.end());
   const std::size_t runs = (triangles.size() + kSplitRun - 1) / kSplitRun;
-  std::vector<SplitGroup> parts(runs);
-  on_threads(runs, threads, [&](std::size_t r) {
-    const std::size_t begin = r * triangles.size() / runs, end = (r + 1) * triangles.size() / runs;
-    std::vector<Triangle>& own = parts[r].simplified.triangles;
-    own.reserve(end - begin);
-    for (std::size_t i = begin; i < end; ++i) own.push_back(triangles[order[i].second]);
-    split_group(positions, cluster_triangles, &parts[r]);
-  });
-  SplitGroup full;
-  full.parts = 0;
-  full.simplified.triangles.reserve(triangles.size());
-  full.part.reserve(triangles.size());
-  for (SplitGroup& p : parts) {
-    full.simplified.triangles.insert(full.simplified.triangles.end(), p.simplified.triangles.begin(),
-                                     p.simplified.triangles.end());
-    for (std::int32_t id : p.part) full.part.push_back(id + full.parts);
-    full.parts += p.parts;
-  }
-  return full;
+  std::vector<std::size_t> starts(runs + 1);
+  for (std::size_t r = 0; r <= runs; ++r) starts[r] = r * triangles.size() / runs;
+  return split_runs(positions, starts, cluster_triangles, threads,
+                    [&](std::size_t i) -> const Triangle& { return triangles[order[i].second]; });
 }
 
 // Phase 3d: a split group's clusters appended to the hierarchy.
@@ -540,10 +554,20 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles) {
         for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) visit(triangles[i], std::int32_t(b));
     });
     for (std::size_t b = 0; b < blocks; ++b) {
+      // The block cut into clusters on every core: halved as the blocks
+      // were, a part a core (one meshlet walk over a block of 2 M triangles
+      // took a second on one core, the rest waiting).
       SplitGroup full;
-      full.simplified.triangles.assign(triangles.begin() + std::ptrdiff_t(starts[b]),
-                                       triangles.begin() + std::ptrdiff_t(starts[b + 1]));
-      split_group(s.positions, options.cluster_triangles, &full);
+      {
+        std::vector<Triangle> own(triangles.begin() + std::ptrdiff_t(starts[b]),
+                                  triangles.begin() + std::ptrdiff_t(starts[b + 1]));
+        const std::size_t part = s.threads > 1 && own.size() >= 2 * kSmallestRun
+                                     ? (own.size() + std::size_t(s.threads) - 1) / std::size_t(s.threads)
+                                     : own.size();
+        const std::vector<std::size_t> runs = kd_blocks(s.positions, &own, part);
+        full = split_runs(s.positions, runs, options.cluster_triangles, s.threads,
+                          [&](std::size_t i) -> const Triangle& { return own[i]; });
+      }
       Block one;
       append_clusters(full, -1, 0, &one.h, &one.active);
       full = SplitGroup();
