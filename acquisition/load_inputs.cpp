@@ -233,8 +233,20 @@ OrientedPoints merge_parts(std::vector<OrientedPoints>* parts) {
 }
 
 void stream_oriented_points(const std::vector<std::string>& inputs, const AcquisitionOptions& options,
-                            AcquisitionReport* report, const std::function<void(OrientedPoints&&)>& take) {
+                            AcquisitionReport* report,
+                            const std::function<void(OrientedPoints&&, double read_share)>& take) {
   const std::vector<Job> jobs = plan_jobs(inputs, options);
+  std::vector<double> bytes(jobs.size() + 1, 0.0);  // of the files before each job
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(jobs[i].file, ec);
+    bytes[i + 1] = bytes[i] + (ec ? 0.0 : double(size));
+  }
+  std::size_t taken = 0;
+  auto take_next = [&](OrientedPoints&& part) {
+    ++taken;
+    take(std::move(part), bytes.back() > 0 ? bytes[taken] / bytes.back() : double(taken) / double(jobs.size()));
+  };
   AcquisitionReport local;
   AcquisitionReport& r = report ? *report : local;
   r = AcquisitionReport();
@@ -242,7 +254,7 @@ void stream_oriented_points(const std::vector<std::string>& inputs, const Acquis
   const std::size_t window = std::size_t(std::max(1, options.threads > 0 ? options.threads : omp_get_max_threads()));
   Progress progress("reading inputs", jobs.size());
   for (std::size_t from = 0; from < jobs.size(); from += window)
-    read_jobs(jobs, from, std::min(jobs.size(), from + window), options, &r, &progress, take);
+    read_jobs(jobs, from, std::min(jobs.size(), from + window), options, &r, &progress, take_next);
   progress.finish();
 }
 

@@ -46,8 +46,11 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
 // order, and no more files are in memory at once than there are cores. For
 // inputs larger than memory (spooled to disk as they come). The report and
 // the errors are those of load_oriented_points().
+// `take` also gets the share of the input files' bytes read so far (its part's
+// file included), so that a caller can project what the rest will hold.
 void stream_oriented_points(const std::vector<std::string>& inputs, const AcquisitionOptions& options,
-                            AcquisitionReport* report, const std::function<void(OrientedPoints&&)>& take);
+                            AcquisitionReport* report,
+                            const std::function<void(OrientedPoints&&, double read_share)>& take);
 
 // The parts as one set, in order (OrientedPoints::append); empties `parts`.
 OrientedPoints merge_parts(std::vector<OrientedPoints>* parts);

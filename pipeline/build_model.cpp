@@ -153,7 +153,7 @@ InputPoints load_within_budget(const std::vector<std::string>& inputs, const Bui
   InputPoints loaded;
   std::vector<OrientedPoints> parts;
   double held = 0;
-  stream_oriented_points(inputs, options.acquisition, report, [&](OrientedPoints&& part) {
+  stream_oriented_points(inputs, options.acquisition, report, [&](OrientedPoints&& part, double read_share) {
     if (!loaded.spool && options.strategy != BuildStrategy::kBricks &&
         held + kInputBytesPerPoint * double(part.size()) <= 0.25 * budget) {
       held += kInputBytesPerPoint * double(part.size());
@@ -167,6 +167,15 @@ InputPoints load_within_budget(const std::vector<std::string>& inputs, const Bui
       if (!std::filesystem::exists(options.work_dir, ec)) loaded.made_folder = options.work_dir;
       std::filesystem::create_directories(options.work_dir, ec);
       if (ec) throw InputError(options.work_dir, "cannot make the work folder: " + ec.message());
+      // The spool and the bins each take a record a point: projected from
+      // the points so far over the share of the input bytes they came from.
+      const double points = (held / kInputBytesPerPoint + double(part.size())) / std::max(read_share, 1e-9);
+      const double need = 2.0 * double(sizeof(PointRecord)) * points;
+      const std::filesystem::space_info space = std::filesystem::space(options.work_dir, ec);
+      if (!ec && double(space.available) < need)
+        throw InputError(options.work_dir, "the input points (about " + std::to_string(std::llround(points / 1e6)) +
+                                               " M) need about " + binary_size(need) + " of disk in the work folder and " +
+                                               binary_size(double(space.available)) + " are free there");
       loaded.spool = std::make_unique<PointSpool>((std::filesystem::path(options.work_dir) / "points.spool").string());
       for (OrientedPoints& held_part : parts) loaded.spool->add(held_part), held_part = OrientedPoints();
       parts.clear();
