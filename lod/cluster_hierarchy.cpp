@@ -274,17 +274,25 @@ void append_clusters(const SplitGroup& g, std::int32_t own_group, std::uint8_t l
 }
 
 // Phase 3a: the active clusters as a graph, joined by the vertices they share.
+// `last`: -1 for every vertex, and so again on return.
 WeightedGraph cluster_graph(const ClusterHierarchy& h, const std::vector<std::int32_t>& active,
-                            const std::vector<std::int32_t>& weld) {
+                            const std::vector<std::int32_t>& weld, std::vector<std::int32_t>* last) {
+  // Each vertex once per cluster that uses it (a vertex is in about six of
+  // a cluster's triangles): a sixth of the entries to sort, which was most of
+  // the graph's cost.
   std::vector<std::pair<std::int32_t, std::int32_t>> uses;  // (vertex, active index)
   for (std::size_t i = 0; i < active.size(); ++i) {
     const Cluster& c = h.clusters[std::size_t(active[i])];
     for (std::uint32_t t = c.first_triangle; t < c.first_triangle + c.triangle_count; ++t)
-      for (std::int32_t v : h.triangles[t]) uses.push_back({weld[std::size_t(v)], std::int32_t(i)});
+      for (std::int32_t v : h.triangles[t]) {
+        const std::int32_t w = weld[std::size_t(v)];
+        std::int32_t& seen = (*last)[std::size_t(w)];
+        if (seen != std::int32_t(i)) seen = std::int32_t(i), uses.push_back({w, std::int32_t(i)});
+      }
   }
+  for (const auto& [w, i] : uses) (*last)[std::size_t(w)] = -1;
   // Sorted on every core: values are their own keys, so the order is the same.
   __gnu_parallel::sort(uses.begin(), uses.end());
-  uses.erase(std::unique(uses.begin(), uses.end()), uses.end());
   std::vector<std::uint64_t> pairs;
   for (std::size_t i = 0; i < uses.size();) {
     std::size_t j = i;
@@ -367,7 +375,7 @@ void run_rounds(Shared& s, Block* b, int rounds = 255) {
     int group_count = 1;
     std::vector<std::int32_t> group_of(active.size(), 0);
     if (active.size() > std::size_t(options.group_clusters))
-      group_of = partition_graph(cluster_graph(h, active, s.weld), options.group_clusters, &group_count);
+      group_of = partition_graph(cluster_graph(h, active, s.weld, &s.vertex_group), options.group_clusters, &group_count);
     std::vector<std::vector<std::int32_t>> members;
     members.resize(std::size_t(group_count));
     for (std::size_t i = 0; i < active.size(); ++i) members[std::size_t(group_of[i])].push_back(active[i]);
@@ -605,7 +613,7 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles) {
     std::iota(all.begin(), all.end(), 0);
     int parts = 1;
     const int per_block = int(std::max<std::size_t>(2, block * n / left));
-    const std::vector<std::int32_t> part = partition_graph(cluster_graph(carried.h, all, s.weld), per_block, &parts);
+    const std::vector<std::int32_t> part = partition_graph(cluster_graph(carried.h, all, s.weld, &s.vertex_group), per_block, &parts);
     std::vector<std::size_t> starts(std::size_t(parts) + 1, 0);
     for (std::int32_t p : part) ++starts[std::size_t(p) + 1];
     for (std::size_t b = 0; b < std::size_t(parts); ++b) starts[b + 1] += starts[b];
