@@ -8,10 +8,10 @@
 # 2x from one hour to the next. Builds nothing.
 #
 # Each row also gives the brick build's cut errors against the in-core
-# build's at 10 k and 50 k triangles: the two-sided mean distance of each
+# build's at 10 k, 50 k and 200 k triangles: the two-sided mean distance of each
 # cut to the in-core full detail, bricks over core.
 #
-# Each row also gives the brick build's own cut errors at 10 k and 50 k
+# Each row also gives the brick build's own cut errors at 10 k, 50 k and 200 k
 # triangles (to its full detail, in 1e-4 of the diagonal), so that rows of
 # one shape at growing sizes can be compared, bricks-only rows included.
 #
@@ -113,14 +113,14 @@ for size in $sizes; do
   "$binary" extract "$work/$reference.mco" --percent 100 -o "$work/full.ply" --quiet
   errors=()
   for m in core bricks; do
-    for t in 10000 50000; do
+    for t in 10000 50000 200000; do
       if [[ -f "$work/$m.mco" ]]; then errors+=("$(cut_error "$work/$m.mco" "$t")"); else errors+=("-"); fi
     done
   done
   rows+=("$(python3 - "$work" "$disk" "$resolution" "$shape" "$budget" "${errors[@]}" <<'EOF'
 import json, os, sys
 work, disk, R, shape, budget = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5]
-err = [None if e == "-" else tuple(map(float, e.split())) for e in sys.argv[6:10]]
+err = [None if e == "-" else tuple(map(float, e.split())) for e in sys.argv[6:12]]
 def load(name):
     if not os.path.exists(f"{work}/{name}.json"): return None, None, None
     j = json.load(open(f"{work}/{name}.json"))
@@ -133,9 +133,9 @@ tri = b["clusters"]["full_triangles"]
 bs = b["seconds"]
 br = b.get("bricks", {})
 def ratio(i):  # bricks over core at one cut
-    return "-" if err[i] is None or err[i + 2] is None else "%.2f" % (err[i + 2][0] / err[i][0])
+    return "-" if err[i] is None or err[i + 3] is None else "%.2f" % (err[i + 3][0] / err[i][0])
 def own(i):
-    return "-" if err[i + 2] is None else "%.1f" % (1e4 * err[i + 2][0] / err[i + 2][1])
+    return "-" if err[i + 3] is None else "%.1f" % (1e4 * err[i + 3][0] / err[i + 3][1])
 same = "-" if c is None else str(c["clusters"]["full_triangles"] == tri)
 core = "-" if c is None else f"{cw:.1f} / {cm:.0f}"
 core_r = "-" if c is None else f"{c['seconds']['reconstruct']:.1f}"
@@ -144,7 +144,7 @@ core_t = "-" if c is None else f"{p/cw/1e3:.0f} k"
 ratio_t = "-" if c is None else f"{bw/cw:.2f}"
 print(f"| {shape} | {p/1e6:.2f} M | {R} | {tri/1e6:.2f} M | {same} | {budget} "
       f"| {core} | {bw:.1f} / {bm:.0f} | {br.get('bricks', '-')} of {br.get('brick_cubes', '-')} "
-      f"| {b.get('cluster_block', 0)/1e3:.0f} k | {ratio(0)} / {ratio(1)} | {own(0)} / {own(1)} "
+      f"| {b.get('cluster_block', 0)/1e3:.0f} k | {ratio(0)} / {ratio(1)} / {ratio(2)} | {own(0)} / {own(1)} / {own(2)} "
       f"| {disk/2**20:.0f} | {core_r} / {bs['reconstruct']:.1f} | {core_c} / {bs['clusters']:.1f} "
       f"| {core_t} / {p/bw/1e3:.0f} k | {ratio_t} | {tri/bs['clusters']/2e3:.0f} k |")
 EOF
@@ -167,11 +167,11 @@ done
   echo "themselves). Throughput: input points per second of the whole build. *clusters/core*: triangles"
   echo "per second per core of the cluster stage (2 cores). *blocks*: triangles per block of the cluster"
   echo "hierarchy in the brick build (0: in core). *cuts*: the brick build's cut error over the in-core"
-  echo "build's at 10 k / 50 k triangles (two-sided mean distance to the in-core full detail, 200 k samples);"
+  echo "build's at 10 k / 50 k / 200 k triangles (two-sided mean distance to the in-core full detail, 200 k samples);"
   echo "*own cut error*: the brick build's, in 1e-4 of the diagonal (to the in-core full detail, or its own"
   echo "in bricks-only rows). \"-\": not run (bricks-only rows), or no cut that small."
   echo
-  echo "| scans of | points | R | triangles | same | budget | in core: s / MiB | bricks: s / MiB | bricks of cubes | blocks | cuts 10 k / 50 k | own cut error 10 k / 50 k | disk MiB | reconstruct s (core / bricks) | clusters s (core / bricks) | points/s (core / bricks) | bricks ÷ core time | clusters/core |"
+  echo "| scans of | points | R | triangles | same | budget | in core: s / MiB | bricks: s / MiB | bricks of cubes | blocks | cuts 10 k / 50 k / 200 k | own cut error 10 k / 50 k / 200 k | disk MiB | reconstruct s (core / bricks) | clusters s (core / bricks) | points/s (core / bricks) | bricks ÷ core time | clusters/core |"
   echo "|---|--:|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
   for row in "${rows[@]}"; do echo "$row"; done
 } > "$work/report.md"
