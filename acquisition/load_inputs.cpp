@@ -59,9 +59,9 @@ Kind classify(const std::string& path) {
     return kind == PlyKind::range_grid ? Kind::range_grid : kind == PlyKind::mesh ? Kind::mesh : Kind::cloud;
   }
   if (ext == ".xyz" || ext == ".pts" || ext == ".xyzn" || ext == ".xyzrgb") return Kind::cloud;
-  if (ext == ".obj" || ext == ".off" || ext == ".stl" || ext == ".vtp") return Kind::mesh;
+  if (ext == ".obj" || ext == ".off" || ext == ".stl" || ext == ".vtp" || ext == ".glb" || ext == ".gltf") return Kind::mesh;
   throw InputError(path, "unknown input type '" + ext +
-                             "': expected .conf, .ply, .pcd, .xyz, .pts, .obj, .off, .stl or .vtp");
+                             "': expected .conf, .ply, .pcd, .xyz, .pts, .obj, .off, .stl, .vtp, .glb or .gltf");
 }
 
 PointCloud read_point_cloud(const std::string& path) {

@@ -31,7 +31,7 @@ void add_build_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "build", "Range scans, organized clouds or a mesh -> LOD model (.mco): marching-cube octree and LOD array");
   cmd->add_option("inputs", args->inputs,
-                  "A .conf, range-grid PLYs, organized PCDs, or a mesh (.ply .obj .off .stl)")
+                  "A .conf, range-grid PLYs, organized PCDs, or a mesh (.ply .obj .off .stl .glb .gltf)")
       ->required();
   cmd->add_option("-o,--output", args->output, "Output model (.mco)")->required();
   add_reconstruct_flags(cmd, &args->flags);

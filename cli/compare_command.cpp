@@ -79,7 +79,7 @@ void add_compare_command(CLI::App& app) {
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
       "compare", "Metro distance between two meshes (both directions) and their topology");
-  cmd->add_option("A", args->a, "Mesh to measure (.ply .obj .off .stl .vtp)")->required();
+  cmd->add_option("A", args->a, "Mesh to measure (.ply .obj .off .stl .vtp .glb .gltf)")->required();
   cmd->add_option("B", args->b, "Reference mesh; its bounding-box diagonal scales the percentages")
       ->required();
   cmd->add_option("--samples", args->options.samples,

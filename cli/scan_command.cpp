@@ -60,7 +60,7 @@ void add_scan_command(CLI::App& app) {
   auto args = std::make_shared<ScanArgs>();
   CLI::App* cmd = app.add_subcommand(
       "scan", "Generate virtual range scans of a mesh (orthographic views on a sphere)");
-  cmd->add_option("mesh", args->mesh, "Mesh to scan (.ply, .obj, .off, .stl, .vtp)")
+  cmd->add_option("mesh", args->mesh, "Mesh to scan (.ply, .obj, .off, .stl, .vtp, .glb, .gltf)")
       ->required();
   cmd->add_option("-o,--output", args->out_dir,
                   "Folder for scan_000.ply ... and scans.conf (created if missing)")

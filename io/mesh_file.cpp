@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "io/gltf_file.h"
+#include "io/gltf_read.h"
 #include "io/obj_writer.h"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -976,7 +977,8 @@ void write_with_openmesh(const std::string& tmp, const std::string& final_path,
   } else if (ext == ".off") {
     writer = &omio::OFFWriter();
     if (has_n) opt += omio::Options::VertexNormal;
-    if (has_c) opt += omio::Options::VertexColor;
+    // RGBA, not RGB: readers such as Open3D's take COFF colours as four values.
+    if (has_c) opt += omio::Options::VertexColor, opt += omio::Options::ColorAlpha;
   } else {
     writer = &omio::STLWriter();
     opt += omio::Options::Binary;
@@ -1048,7 +1050,7 @@ void write_vtp(const std::string& tmp, const std::string& final_path, const Tria
     throw InputError(final_path, "writing vtp failed: " + first_line(errors.message()));
 }
 
-const char* const kFormats = ".ply, .obj, .off, .stl or .vtp";
+const char* const kFormats = ".ply, .obj, .off, .stl, .vtp, .glb or .gltf";
 const char* const kOutputFormats = ".ply, .obj, .off, .stl, .vtp, .glb or .gltf";
 
 }  // namespace
@@ -1065,6 +1067,8 @@ TriangleMesh read_mesh(const std::string& path) {
     mesh = read_obj(path);
   else if (ext == ".vtp")
     mesh = read_vtp(path);
+  else if (is_gltf_path(path))
+    mesh = read_gltf(path);
   else
     throw InputError(path, "unknown mesh extension '" + ext + "', expected " + kFormats);
 

@@ -1,10 +1,12 @@
 // Triangle meshes on disk: the pipeline's input models and its outputs. PLY,
 // OFF and STL are read, and PLY, OFF and STL written, by OpenMesh; .vtp goes
-// through VTK; glTF is written by tinygltf (io/gltf_file.h); OBJ is read by a
-// small parser here (Debian's OpenMesh asserts, i.e. aborts, on some broken
-// OBJ faces) and written by io/obj_writer.h (OpenMesh's drops vertex colours). The OpenMesh adapters copy straight between files and the plain
-// TriangleMesh, never through a half-edge mesh, so non-manifold faces
-// (marching-cubes and LOD output can have them) are neither dropped nor split.
+// through VTK; glTF is written (io/gltf_file.h) and read (io/gltf_read.h) by
+// tinygltf; OBJ is read by a small parser here (Debian's OpenMesh asserts,
+// i.e. aborts, on some broken OBJ faces) and written by io/obj_writer.h
+// (OpenMesh's drops vertex colours). The OpenMesh adapters copy straight
+// between files and the plain TriangleMesh, never through a half-edge mesh, so
+// non-manifold faces (marching-cubes and LOD output can have them) are
+// neither dropped nor split.
 #pragma once
 
 #include "core/types.h"
@@ -13,12 +15,14 @@
 
 namespace scan2lod {
 
-// Reads a mesh from a .ply, .obj, .off, .stl or .vtp file (extension decides,
-// case-insensitive). Polygons are fan-triangulated. Vertex normals and
-// colours are kept when the file has them (else `normals`/`colors` are empty;
-// OBJ colours are the `v x y z r g b` extension, OBJ normals count only when
-// every used vertex has one). STL has no shared vertices: OpenMesh merges
-// equal corner positions and skips triangles that collapse by it.
+// Reads a mesh from a .ply, .obj, .off, .stl, .vtp, .glb or .gltf file
+// (extension decides, case-insensitive; glTF as io/gltf_read.h describes: the
+// default scene with node transforms applied, quantized or not). Polygons are
+// fan-triangulated. Vertex normals and colours are kept when the file has
+// them (else `normals`/`colors` are empty; OBJ colours are the `v x y z r g b`
+// extension, OBJ normals count only when every used vertex has one). STL has
+// no shared vertices: OpenMesh merges equal corner positions and skips
+// triangles that collapse by it.
 // Throws InputError naming the file when it is missing, has an unknown
 // extension, cannot be parsed, is truncated, has no vertices or no faces, or
 // has a face that names a vertex that does not exist. A Stanford range-grid
@@ -36,7 +40,8 @@ TriangleMesh read_mesh(const std::string& path);
 //   .ply  binary little-endian, with vertex normals and colours when present
 //   .obj  ASCII, with `vn` normals and `v x y z r g b` colours when present
 //         (9 significant digits)
-//   .off  ASCII (NOFF/COFF when normals/colours are present)
+//   .off  ASCII (NOFF/COFF when normals/colours are present; colours as four
+//         integers, RGBA with alpha 255; both three and four are read)
 //   .stl  binary (normals and colours are not stored)
 //   .vtp  VTK XML poly data, raw appended binary (uncompressed), with
 //         "Normals" and an unsigned-char "RGB" array when present
