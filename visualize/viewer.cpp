@@ -108,8 +108,9 @@ ViewerInput load_viewer_input(const std::vector<std::string>& inputs) {
     scans = ply_is_range_grid(inputs[0]);
   }
   if (!scans) {
-    if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl" && ext != ".vtp")
-      throw InputError(inputs[0], "view expects a model (.mco), a mesh (.ply .obj .off .stl .vtp) or a scan set "
+    if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl" && ext != ".vtp" && ext != ".glb" &&
+        ext != ".gltf")
+      throw InputError(inputs[0], "view expects a model (.mco), a mesh (.ply .obj .off .stl .vtp .glb .gltf) or a scan set "
                                   "(.conf, range-grid .ply, organized .pcd), got extension '" + ext + "'");
     in.kind = ViewerInput::Kind::mesh;
     in.mesh = read_mesh(inputs[0]);
