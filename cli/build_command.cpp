@@ -5,6 +5,7 @@
 #include "cli/outputs.h"
 #include "cli/reconstruct_flags.h"
 #include "cli/terminal.h"
+#include "io/atomic_file.h"
 #include "lod/model_file.h"
 #include "pipeline/build_model.h"
 
@@ -58,6 +59,7 @@ void add_build_command(CLI::App& app) {
     auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
     const auto start = clock::now();
     check_model_output(args->output);
+    check_output_path(args->output);  // writable, before minutes of work
     refuse_overwriting_inputs(args->output, args->inputs);
     BuildOptions options = args->flags.build_options(args->output);
     options.octree = args->structure != "clusters";

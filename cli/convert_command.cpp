@@ -1,6 +1,7 @@
 #include "acquisition/scan_set.h"
 #include "cli/commands.h"
 #include "cli/terminal.h"
+#include "io/atomic_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -30,6 +31,7 @@ void add_convert_command(CLI::App& app) {
   cmd->add_flag("--json", args->json, "Print the counts as JSON");
   cmd->callback([args] {
     const auto start = std::chrono::steady_clock::now();
+    check_output_folder(args->output);
     std::vector<PlacedScan> scans = read_scan_set(args->inputs, args->threads);
     write_scan_set(args->output, scans, args->conf_name);
     std::size_t samples = 0;

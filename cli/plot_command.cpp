@@ -4,6 +4,7 @@
 // reference mesh.
 #include "cli/commands.h"
 #include "cli/terminal.h"
+#include "io/atomic_file.h"
 #include "io/mesh_file.h"
 #include "lod/model_file.h"
 #include "visualize/levels.h"
@@ -47,6 +48,7 @@ void add_plot_command(CLI::App& app) {
     options.log_metric = !args->linear;
     const std::vector<double> percents = parse_percent_list(args->percents, "--percent");
     check_png_output(args->output);
+    check_output_path(args->output);
     const LodModel model = load_model(args->model);  // file errors first, then the display
     const LodStructure structure = structure_named(model, args->structure, args->model);
     const TriangleMesh reference = args->reference.empty() ? TriangleMesh{} : read_mesh(args->reference);

@@ -4,6 +4,7 @@
 #include "cli/commands.h"
 #include "cli/terminal.h"
 #include "core/error.h"
+#include "io/atomic_file.h"
 #include "lod/lod_model.h"
 #include "lod/model_file.h"
 #include "visualize/levels.h"
@@ -50,6 +51,7 @@ void add_render_command(CLI::App& app) {
     options.azimuth = args->azimuth;
     options.elevation = args->elevation;
     check_png_output(args->output);
+    check_output_path(args->output);
     const LodModel model = load_model(args->model);  // file errors first, then the display
     const LodStructure structure = structure_named(model, args->structure, args->model);
     require_display("render");

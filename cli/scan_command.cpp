@@ -3,6 +3,7 @@
 #include "acquisition/virtual_scanner.h"
 #include "cli/commands.h"
 #include "cli/terminal.h"
+#include "io/atomic_file.h"
 #include "io/mesh_file.h"
 
 #include <nlohmann/json.hpp>
@@ -36,6 +37,7 @@ bool parse_size(const std::string& text, int& width, int& height) {
 
 void run(ScanArgs& args) {
   parse_size(args.size, args.options.width, args.options.height);  // validated by CLI11
+  check_output_folder(args.out_dir);
   const TriangleMesh mesh = read_mesh(args.mesh);
   const std::vector<VirtualScan> scans = virtual_scan(mesh, args.options);
   write_scan_set(args.out_dir, scans);

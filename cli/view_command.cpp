@@ -3,12 +3,14 @@
 // slider moves and key presses, then it exits.
 #include "cli/commands.h"
 #include "core/error.h"
+#include "io/atomic_file.h"
 #include "visualize/levels.h"
 #include "visualize/montage.h"
 #include "visualize/png_output.h"
 #include "visualize/viewer.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -37,13 +39,14 @@ void add_view_command(CLI::App& app) {
       ->check(CLI::IsMember({"clusters", "octree"}));
   cmd->add_option("--compare", args->compare, "Level of the split view's right half (key v)")->capture_default_str();
   cmd->add_option("--size", args->size, "Window pixels, WIDTHxHEIGHT")->capture_default_str();
-  cmd->add_option("--screenshot", args->screenshot, "Where key s saves (NAME_2.png, ... once it exists)")
-      ->capture_default_str();
+  CLI::Option* screenshot =
+      cmd->add_option("--screenshot", args->screenshot, "Where key s saves (NAME_2.png, ... once it exists)")
+          ->capture_default_str();
   cmd->add_option("--script", args->script,
                   "Run commands from FILE instead of waiting for a user, print the state after each, and exit "
                   "(percent P | triangles T | slider V | key KEY | orbit DEGREES | zoom FACTOR | screenshot PATH | print)");
   cmd->add_flag("--offscreen", args->offscreen, "Render without showing a window (with --script; implied by it)");
-  cmd->callback([args] {
+  cmd->callback([args, screenshot] {
     ViewerOptions options;
     parse_size(args->size, "--size", &options.width, &options.height);
     if (!(args->percent >= 0 && args->percent <= 100))
@@ -54,6 +57,15 @@ void add_view_command(CLI::App& app) {
       throw InputError("", "--offscreen needs --script: an off-screen viewer with nobody to drive it would never "
                            "end (for pictures without a script, use scan2lod render)");
     check_png_output(args->screenshot);
+    // Named on the command line, it must be writable; the default is only
+    // written if the user asks (key s) and must not stop a viewer started in
+    // a read-only folder. An existing one is not replaced (key s picks NAME_2),
+    // so then only its folder matters.
+    if (screenshot->count() > 0) {
+      const std::filesystem::path shot(args->screenshot);
+      if (!std::filesystem::exists(shot)) check_output_path(args->screenshot);
+      else check_output_folder(shot.has_parent_path() ? shot.parent_path().string() : ".");
+    }
     std::ifstream script;
     if (!args->script.empty()) {
       script.open(args->script);
