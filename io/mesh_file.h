@@ -48,8 +48,8 @@ TriangleMesh read_mesh(const std::string& path);
 //   .glb  glTF 2.0 binary, .gltf glTF 2.0 JSON with the buffer embedded:
 //         normals and colours when present; quantized unless options say not
 // `mesh` must be consistent: every triangle index < positions.size(), and
-// normals/colors empty or one per vertex. Output goes through a temporary file
-// renamed into place (write_atomically), so a failure leaves nothing behind.
+// normals/colors empty or one per vertex. Output goes through write_atomically,
+// so a failure or a signal leaves nothing behind.
 // Throws InputError for an unknown extension (listing the supported ones), an
 // inconsistent or empty mesh, or a write failure (e.g. a missing directory).
 struct MeshWriteOptions {

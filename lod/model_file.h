@@ -113,8 +113,8 @@ namespace scan2lod {
 constexpr std::uint32_t kModelFormatMajor = 4;
 constexpr std::uint32_t kModelFormatMinor = 4;
 
-// Writes `model` to `path` (extension .mco) through a temporary file renamed
-// into place (write_atomically): a failure leaves nothing under `path`.
+// Writes `model` to `path` (extension .mco) through write_atomically: a
+// failure or a signal leaves nothing under `path`.
 // Throws InputError for another extension, a missing folder or a failed write.
 void save_model(const std::string& path, const LodModel& model);
 

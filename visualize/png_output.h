@@ -16,8 +16,8 @@ void check_png_output(const std::string& path);
 // ("bad X server connection") instead of failing.
 void require_display(const std::string& what);
 
-// Renders `window` and writes its pixels (RGB) to `path` as a PNG through a
-// temporary file renamed into place (write_atomically). Throws InputError
+// Renders `window` and writes its pixels (RGB) to `path` as a PNG through
+// write_atomically. Throws InputError
 // naming the file when the write fails.
 void write_window_png(vtkRenderWindow* window, const std::string& path);
 
