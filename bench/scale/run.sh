@@ -102,10 +102,12 @@ for size in $sizes; do
   fi
   echo "scale: $views views of ${pixels}^2 at R = $resolution: in bricks (--memory $budget)" >&2
   # The work folder at its largest: sampled while the build runs.
-  ( peak=0; while sleep 2; do d=$(du -sb "$work/w" 2>/dev/null | cut -f1); (( ${d:-0} > peak )) && peak=$d; echo "$peak" > "$work/disk"; done ) &
+  # (du fails when a file vanishes under it; under set -e and pipefail that
+  # must not end the sampler, nor the kill of an ended sampler the script.)
+  ( peak=0; while sleep 2; do d=$(du -sb "$work/w" 2>/dev/null | cut -f1 || true); (( ${d:-0} > peak )) && peak=$d; echo "$peak" > "$work/disk"; done ) &
   sampler=$!
   run bricks "$scans/scans.conf" -r "$resolution" -o "$work/bricks.mco" --memory "$budget" --work-dir "$work/w"
-  kill "$sampler" 2>/dev/null; wait "$sampler" 2>/dev/null || true
+  kill "$sampler" 2>/dev/null || true; wait "$sampler" 2>/dev/null || true
   disk=$(cat "$work/disk" 2>/dev/null || echo 0)
   rm -rf "$scans"
   reference=core
