@@ -191,10 +191,8 @@ InputPoints load_within_budget(const std::vector<std::string>& inputs, const Bui
 Reconstruction reconstruct_within_budget(InputPoints* points, const BuildOptions& options, BuildReport* report_out) {
   BuildReport local;
   BuildReport* report = report_out ? report_out : &local;
-  return reconstruct_budgeted(points->spool ? nullptr : &points->points, points->spool.get(), options, report, [points] {
-    points->points = OrientedPoints();
-    points->spool.reset();
-  });
+  return reconstruct_budgeted(points->spool ? nullptr : &points->points, points->spool.get(), options, report,
+                              [points] { points->release(); });
 }
 
 namespace {
@@ -309,10 +307,7 @@ LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions&
   for (const std::string& input : inputs) names += (names.empty() ? "" : ", ") + input;
   LodModel model = build_from_points(points.spool ? nullptr : &points.points, points.spool.get(),
                                      report.mesh_input && options.clusters ? &mesh : nullptr, options, &report, names,
-                                     [&points] {
-                                       points.points = OrientedPoints();
-                                       points.spool.reset();
-                                     },
+                                     [&points] { points.release(); },
                                      &progress);
   report.acquisition = acquisition;
   report.seconds_read = read;

@@ -74,6 +74,7 @@ struct InputPoints {
   std::unique_ptr<PointSpool> spool;  // or on disk (closed)
   std::string made_folder;            // the work folder the spool made, removed with it when left empty
   std::size_t size() const { return spool ? spool->census().count : points.size(); }
+  void release() { points = OrientedPoints(), spool.reset(); }
   InputPoints() = default;
   InputPoints(InputPoints&&) = default;
   ~InputPoints();

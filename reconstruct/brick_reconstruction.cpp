@@ -333,9 +333,13 @@ void bin_points(const PointSource& points, const BrickPlan& plan, const Reconstr
     return std::uint32_t(brick_of(plan.grid, plan.brick_cubes, n, p, Vec3d::Zero()));
   };
   std::unordered_map<std::uint32_t, std::size_t> counts;
+  std::uint32_t last = ~0u;
+  std::size_t* last_count = nullptr;  // input order runs along a scan: mostly the same brick as before
   points.for_each([&](const PointRecord* r, std::size_t count) {
     for (std::size_t i = 0; i < count; ++i) {
-      ++counts[brick(r[i].position)];
+      const std::uint32_t b = brick(r[i].position);
+      if (b != last) last = b, last_count = &counts[b];
+      ++*last_count;
       if (!points.census.spacing || r[i].spacing <= h) continue;
       const Vec3f& p = r[i].position;
       const double reach = influence(relaxed_factor, r[i].spacing, h);
@@ -379,7 +383,7 @@ void bin_points(const PointSource& points, const BrickPlan& plan, const Reconstr
     cursor[c] += buffer.size();
     buffer.clear();
   };
-  std::uint32_t last = ~0u;
+  last = ~0u;
   std::size_t c = 0;
   points.for_each([&](const PointRecord* r, std::size_t count) {
     for (std::size_t i = 0; i < count; ++i) {

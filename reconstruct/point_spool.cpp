@@ -6,8 +6,8 @@
 
 #include <cerrno>
 #include <cstring>
-#include <filesystem>
 #include <algorithm>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 
@@ -15,8 +15,6 @@ namespace scan2lod {
 namespace {
 
 constexpr std::size_t kBufferRecords = 1 << 16;  // 2.5 MiB, reused
-
-XXH3_state_t* state(void* p) { return static_cast<XXH3_state_t*>(p); }
 
 // The records of part's points [from, to), numbered from `first` on.
 void pack(const OrientedPoints& part, std::size_t first, std::size_t from, std::size_t to,
@@ -51,48 +49,71 @@ void count_part(const OrientedPoints& part, PointCensus* census) {
 
 }  // namespace
 
-PointSpool::PointSpool(std::string path) : path_(std::move(path)) {
+// The census taken part by part: each part packed a buffer at a time, the
+// buffers hashed and handed on (to the spool's file, or nowhere).
+class CensusTaker {
+ public:
+  CensusTaker() : hash_(XXH3_createState()) { XXH3_64bits_reset(hash_); }
+  ~CensusTaker() { XXH3_freeState(hash_); }
+  CensusTaker(const CensusTaker&) = delete;
+  CensusTaker& operator=(const CensusTaker&) = delete;
+
+  template <class Sink>
+  void add(const OrientedPoints& part, Sink sink) {
+    count_part(part, &census_);
+    for (std::size_t i = 0; i < part.size(); i += kBufferRecords) {
+      pack(part, census_.count, i, std::min(part.size(), i + kBufferRecords), &buffer_);
+      for (const PointRecord& r : buffer_) census_.box.extend(r.position);
+      XXH3_64bits_update(hash_, buffer_.data(), buffer_.size() * sizeof(PointRecord));
+      sink(buffer_);
+    }
+    census_.count += part.size();
+  }
+  const PointCensus& census() const { return census_; }
+  PointCensus finish() {
+    census_.hash = XXH3_64bits_digest(hash_);
+    return census_;
+  }
+
+ private:
+  XXH3_state_t* hash_;
+  PointCensus census_;
+  std::vector<PointRecord> buffer_;
+};
+
+PointSpool::PointSpool(std::string path) : path_(std::move(path)), taker_(std::make_unique<CensusTaker>()) {
   file_ = std::fopen(path_.c_str(), "wb");
   if (!file_) throw InputError(path_, "cannot write the point spool: " + std::string(std::strerror(errno)));
-  hash_state_ = XXH3_createState();
-  XXH3_64bits_reset(state(hash_state_));
-  buffer_.reserve(kBufferRecords);
 }
 
 PointSpool::~PointSpool() {
   if (file_) std::fclose(file_);
-  if (hash_state_) XXH3_freeState(state(hash_state_));
   std::error_code ec;
   std::filesystem::remove(path_, ec);
 }
 
+const PointCensus& PointSpool::census() const { return taker_ ? taker_->census() : census_; }
+
 void PointSpool::add(const OrientedPoints& part) {
-  if (!hash_state_) throw std::logic_error("PointSpool::add after close");
-  count_part(part, &census_);
-  for (std::size_t i = 0; i < part.size(); i += kBufferRecords) {
-    pack(part, census_.count, i, std::min(part.size(), i + kBufferRecords), &buffer_);
-    for (const PointRecord& r : buffer_) census_.box.extend(r.position);
-    XXH3_64bits_update(state(hash_state_), buffer_.data(), buffer_.size() * sizeof(PointRecord));
-    if (std::fwrite(buffer_.data(), sizeof(PointRecord), buffer_.size(), file_) != buffer_.size())
+  if (!taker_) throw std::logic_error("PointSpool::add after close");
+  taker_->add(part, [&](const std::vector<PointRecord>& buffer) {
+    if (std::fwrite(buffer.data(), sizeof(PointRecord), buffer.size(), file_) != buffer.size())
       throw InputError(path_, "cannot write the point spool: " + std::string(std::strerror(errno)));
-  }
-  census_.count += part.size();
+  });
 }
 
 void PointSpool::close() {
-  if (!hash_state_) return;
+  if (!taker_) return;
   if (std::fflush(file_) != 0 || std::ferror(file_))
     throw InputError(path_, "cannot write the point spool: " + std::string(std::strerror(errno)));
   std::fclose(file_);
   file_ = nullptr;
-  census_.hash = XXH3_64bits_digest(state(hash_state_));
-  XXH3_freeState(state(hash_state_));
-  hash_state_ = nullptr;
-  buffer_ = std::vector<PointRecord>();
+  census_ = taker_->finish();
+  taker_.reset();
 }
 
 void PointSpool::for_each(const RecordVisitor& visit) const {
-  if (hash_state_) throw std::logic_error("PointSpool::for_each before close");
+  if (taker_) throw std::logic_error("PointSpool::for_each before close");
   std::FILE* in = std::fopen(path_.c_str(), "rb");
   if (!in) throw InputError(path_, "the point spool vanished: " + std::string(std::strerror(errno)));
   std::vector<PointRecord> buffer(kBufferRecords);
@@ -119,18 +140,9 @@ void for_each_record(const OrientedPoints& points, const RecordVisitor& visit) {
 }
 
 PointCensus census_of(const OrientedPoints& points) {
-  PointCensus census;
-  count_part(points, &census);
-  XXH3_state_t* hash = XXH3_createState();
-  XXH3_64bits_reset(hash);
-  for_each_record(points, [&](const PointRecord* r, std::size_t n) {
-    for (std::size_t i = 0; i < n; ++i) census.box.extend(r[i].position);
-    XXH3_64bits_update(hash, r, n * sizeof(PointRecord));
-  });
-  census.hash = XXH3_64bits_digest(hash);
-  XXH3_freeState(hash);
-  census.count = points.size();
-  return census;
+  CensusTaker taker;
+  taker.add(points, [](const std::vector<PointRecord>&) {});
+  return taker.finish();
 }
 
 void append_records(const PointRecord* records, std::size_t n, const PointCensus& census, OrientedPoints* points) {

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,8 @@ struct PointCensus {
 // Visits records a buffer at a time, in order.
 using RecordVisitor = std::function<void(const PointRecord*, std::size_t)>;
 
+class CensusTaker;
+
 class PointSpool {
  public:
   // Creates (or empties) the file at `path`; it is removed with the spool.
@@ -54,7 +57,7 @@ class PointSpool {
   // Ends writing; reading may start. The census is final from here.
   void close();
 
-  const PointCensus& census() const { return census_; }
+  const PointCensus& census() const;  // final once closed
   const std::string& path() const { return path_; }
 
   // Calls visit(records, n) over all records in order, a buffer at a time.
@@ -63,9 +66,8 @@ class PointSpool {
  private:
   std::string path_;
   std::FILE* file_ = nullptr;
-  PointCensus census_;
-  void* hash_state_ = nullptr;  // XXH3 state while writing
-  std::vector<PointRecord> buffer_;
+  PointCensus census_;                  // once closed
+  std::unique_ptr<CensusTaker> taker_;  // while writing
 };
 
 // The records of points in memory, as a spool of them would hold them.
