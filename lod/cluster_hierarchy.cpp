@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/morton.h"
 #include "lod/cluster_partition.h"
+#include "lod/group_clustering.h"
 #include "lod/group_simplify.h"
 #include "lod/triangle_spool.h"
 
@@ -363,10 +364,71 @@ void add_seed(const Block& from, std::size_t c, Block* b) {
   b->seeds = b->h.clusters.size();
 }
 
+// A group's error against what its triangles can hold: a patch of radius r
+// in k triangles has triangles about r / sqrt(k) across, and a deviation of
+// many of them means the surface folded over itself. Measured as error *
+// sqrt(k) / r: at most 1.7 on the bunny's reconstruction, 4.2 on
+// bun_zipper.ply and 4.1 on a two-bunny scan set at R = 1024, whose last
+// group, left mostly handles, folded into a pyramid at 43.
+constexpr float kFolded = 12;
+bool folded(const SimplifiedGroup& g, float radius) {
+  return g.error * std::sqrt(float(std::max<std::size_t>(g.triangles.size(), 1))) > kFolded * radius;
+}
+
+// Phase 3d: a group that simplified becomes a DAG node over `members`; its
+// output, cut into clusters, joins `next`.
+void add_group(Shared& s, const std::vector<std::int32_t>& members, SplitGroup& made, Block* b,
+               std::vector<std::int32_t>* next) {
+  ClusterHierarchy& h = b->h;
+  const std::int32_t group = std::int32_t(h.groups.size());
+  // Deviations of successive simplifications add up (the triangle
+  // inequality), so the group's error is its own plus the worst below.
+  float below = 0;
+  std::vector<Sphere> children;
+  for (std::int32_t c : members) {
+    h.clusters[std::size_t(c)].parent_group = group;
+    below = std::max(below, b->own_error[std::size_t(c)]);
+    children.push_back(b->sphere[std::size_t(c)]);
+  }
+  const float error = std::max(below + made.simplified.error, s.error_floor);
+  const Sphere sphere = enclosing_sphere(children);
+  h.groups.push_back({{sphere.center.x(), sphere.center.y(), sphere.center.z()}, sphere.radius, error});
+  append_clusters(made, group, std::uint8_t(b->round), &h, next);
+  b->sphere.resize(h.clusters.size(), sphere);
+  b->own_error.resize(h.clusters.size(), error);
+}
+
+// The hierarchy's last step. Where the rounds stall above kCoarsestTriangles
+// (a scan whose handles edge collapse cannot remove), everything left is one
+// group, clustered with its topology free but no piece lost, down to about
+// that many. Cuts above this step are untouched, so they stay as sound as
+// the full mesh.
+void finish_top(Shared& s, Block* b) {
+  ClusterHierarchy& h = b->h;
+  std::vector<Triangle> tris;
+  for (std::int32_t c : b->active) {
+    const Cluster& cl = h.clusters[std::size_t(c)];
+    for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t) {
+      const Triangle& o = h.triangles[t];
+      tris.push_back({s.weld[std::size_t(o[0])], s.weld[std::size_t(o[1])], s.weld[std::size_t(o[2])]});
+    }
+  }
+  if (tris.size() <= kCoarsestTriangles || b->round >= 255) return;
+  SplitGroup top;
+  top.simplified = cluster_group(tris, kCoarsestTriangles, s.input, ClusterSoundness::kPiecesOnly);
+  if (top.simplified.triangles.size() >= tris.size()) return;
+  split_group(s.positions, s.options->cluster_triangles, &top);
+  std::vector<std::int32_t> next;
+  add_group(s, b->active, top, b, &next);
+  b->active = std::move(next);
+  ++b->round;
+}
+
 // Phase 3: round after round, the block's active clusters grouped, each group
 // simplified to about half and cut into new clusters, until no group
-// simplifies or one cluster is left. Vertices locked at 2 stay locked.
-void run_rounds(Shared& s, Block* b, int rounds = 255) {
+// simplifies or one cluster is left; at the `top`, finish_top. Vertices
+// locked at 2 stay locked.
+void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
   const ClusterOptions& options = *s.options;
   ClusterHierarchy& h = b->h;
   std::vector<std::int32_t>& active = b->active;
@@ -407,9 +469,29 @@ void run_rounds(Shared& s, Block* b, int rounds = 255) {
         }
       }
       before[g] = tris.size();
-      result[g].simplified =
-          simplify_group(tris, std::size_t(std::ceil(double(tris.size()) * options.reduction)), s.input);
-      const std::size_t kept = result[g].simplified.triangles.size();
+      const std::size_t target = std::size_t(std::ceil(double(tris.size()) * options.reduction));
+      SimplifiedGroup& simplified = result[g].simplified;
+      simplified = simplify_group(tris, target, s.input);
+      // Folded: collapses that only handles left room for dragged the
+      // surface across the group. Lighter targets, else a stall.
+      const float radius = points_sphere(s.positions, tris.data(), tris.size()).radius;
+      for (double lighter : {0.5 * (1 + options.reduction), options.stall, 1.0}) {
+        if (!folded(simplified, radius)) break;
+        if (lighter == 1.0) {
+          simplified.triangles = tris;
+          simplified.error = 0;
+          break;
+        }
+        simplified = simplify_group(tris, std::size_t(std::ceil(double(tris.size()) * lighter)), s.input);
+      }
+      if (double(simplified.triangles.size()) > options.stall * double(tris.size())) {
+        // Stalled: collapses cannot remove what is left (handles, mostly).
+        // Clustering goes on from there; the deviations add up.
+        SimplifiedGroup clustered = cluster_group(simplified.triangles, target, s.input);
+        clustered.error += simplified.error;
+        simplified = std::move(clustered);
+      }
+      const std::size_t kept = simplified.triangles.size();
       if (kept > 0 && double(kept) <= options.stall * double(tris.size()))
         split_group(s.positions, options.cluster_triangles, &result[g]);
     });
@@ -430,27 +512,13 @@ void run_rounds(Shared& s, Block* b, int rounds = 255) {
         continue;
       }
       progress = true;
-      const std::int32_t group = std::int32_t(h.groups.size());
-      // Deviations of successive simplifications add up (the triangle
-      // inequality), so the group's error is its own plus the worst below.
-      float below = 0;
-      std::vector<Sphere> children;
-      for (std::int32_t c : members[g]) {
-        h.clusters[std::size_t(c)].parent_group = group;
-        below = std::max(below, b->own_error[std::size_t(c)]);
-        children.push_back(b->sphere[std::size_t(c)]);
-      }
-      const float error = std::max(below + result[g].simplified.error, s.error_floor);
-      const Sphere sphere = enclosing_sphere(children);
-      h.groups.push_back({{sphere.center.x(), sphere.center.y(), sphere.center.z()}, sphere.radius, error});
-      append_clusters(result[g], group, std::uint8_t(b->round), &h, &next);
-      b->sphere.resize(h.clusters.size(), sphere);
-      b->own_error.resize(h.clusters.size(), error);
+      add_group(s, members[g], result[g], b, &next);
     }
     if (options.progress) options.progress(std::min(1.0, s.simplified / s.expected));
     active = std::move(next);
     if (!progress) break;
   }
+  if (top) finish_top(s, b);
 }
 
 // Phase 4: a block's finished clusters (those with a parent, or all of them
@@ -596,7 +664,7 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles) {
 
     if (left <= block || carried.h.clusters.size() <= std::size_t(options.group_clusters) || round >= 254) {
       carried.round = round;
-      run_rounds(s, &carried);
+      run_rounds(s, &carried, 255, true);
       write_block(carried, true, &out, nullptr, spool);
       out.spool = options.spool;
       return out;
@@ -739,7 +807,7 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
       all.sphere.push_back(points_sphere(positions, &all.h.triangles[c.first_triangle], c.triangle_count));
     all.own_error.assign(all.h.clusters.size(), 0.f);
     all.seeds = all.h.clusters.size();
-    run_rounds(s, &all);
+    run_rounds(s, &all, 255, true);
     h = std::move(all.h);
   }
   h.pages = cluster_pages(h);

@@ -111,6 +111,11 @@ struct ClusterOptions {
   std::function<void(double)> progress;
 };
 
+// Triangles the coarsest cut holds at most, on any mesh with fewer pieces
+// than this: where edge collapse stalls above it, the last step clusters
+// what is left (lod/group_clustering.h).
+constexpr std::size_t kCoarsestTriangles = 256;
+
 // Triangles a page holds at most, unless one cluster holds more (64 KiB at
 // 12 bytes a triangle: one read from a disk or over HTTP).
 constexpr std::uint32_t kPageTriangles = 5461;

@@ -1,5 +1,7 @@
 #include "lod/group_simplify.h"
 
+#include "core/point_triangle.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -208,29 +210,6 @@ bool collapse_allowed(GroupTopology* g, int from, int to, const std::vector<std:
   return true;
 }
 
-// Distance from p to the triangle abc (Ericson, *Real-Time Collision
-// Detection*, 2005, closest point by Voronoi regions).
-double point_triangle_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                               const Eigen::Vector3d& c) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return ap.norm();
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return bp.norm();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).norm();
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return cp.norm();
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
-  const double denom = 1 / (va + vb + vc);
-  return (p - (a + ab * (vb * denom) + ac * (vc * denom))).norm();
-}
-
 // Phase: the group's error, measured: how far each removed vertex lies from
 // the triangles around the vertex it went to (a one-sided Hausdorff distance
 // over the group's vertices, in scaled units).
@@ -248,21 +227,20 @@ double removed_vertex_distance(GroupTopology& g, std::vector<int>& moved_to,
     for (int t : g.incident[std::size_t(rep)]) {
       if (g.dead[std::size_t(t)]) continue;
       const auto& tri = g.tris[std::size_t(t)];
-      nearest = std::min(nearest, point_triangle_distance(p, point(tri[0]), point(tri[1]), point(tri[2])));
+      nearest = std::min(nearest, std::sqrt(point_triangle_distance2(p, point(tri[0]), point(tri[1]), point(tri[2]))));
     }
     if (std::isfinite(nearest)) worst = std::max(worst, nearest);
   }
   return worst;
 }
 
-// Per-thread scratch: global vertex -> group vertex, all -1 between groups.
-std::vector<int>& local_index(std::size_t vertices) {
+}  // namespace
+
+std::vector<int>& group_local_index(std::size_t vertices) {
   thread_local std::vector<int> map;
   if (map.size() < vertices) map.assign(vertices, -1);
   return map;
 }
-
-}  // namespace
 
 // Phase 1: the group's triangles in local indices, with their incidence and
 // which vertices are locked or on the border. Returns local -> global.
@@ -432,7 +410,7 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
   const bool use_colors = in.color_weight > 0 && !in.colors.empty();
   thread_local GroupTopology g;
   thread_local GroupQuadrics q;  // reused: a group's quadrics are about a megabyte
-  std::vector<int>& local = local_index(in.positions.size());
+  std::vector<int>& local = group_local_index(in.positions.size());
   const std::vector<std::int32_t> global = load_group(triangles, in, local, &g);
   group_quadrics(g, global, in, use_normals, use_colors, &q);
   std::vector<int> moved_to = collapse_to_target(target, &g, &q);
