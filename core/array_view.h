@@ -27,4 +27,25 @@ class ArrayView {
   std::size_t size_ = 0;
 };
 
+// A read-only view of a flat array followed by a vector that grows: the
+// cluster hierarchy reads the model's vertices and those its collapses add,
+// by one index. The vector may grow only while no view is read.
+template <class T>
+class JoinedView {
+ public:
+  JoinedView() = default;
+  JoinedView(ArrayView<T> base, const std::vector<T>* tail = nullptr) : base_(base), tail_(tail) {}  // NOLINT
+  template <class Allocator>
+  JoinedView(const std::vector<T, Allocator>& v) : base_(v) {}  // NOLINT: implicit by design
+
+  std::size_t size() const { return base_.size() + (tail_ ? tail_->size() : 0); }
+  bool empty() const { return size() == 0; }
+  const T& operator[](std::size_t i) const { return i < base_.size() ? base_[i] : (*tail_)[i - base_.size()]; }
+  ArrayView<T> base() const { return base_; }
+
+ private:
+  ArrayView<T> base_;
+  const std::vector<T>* tail_ = nullptr;
+};
+
 }  // namespace scan2lod

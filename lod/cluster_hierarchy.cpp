@@ -61,7 +61,7 @@ std::vector<std::int32_t> weld_positions(ArrayView<Vec3f> positions) {
 }
 
 // The smallest-ish sphere (box centre) around some points.
-Sphere points_sphere(ArrayView<Vec3f> positions, const Triangle* tris, std::size_t count) {
+Sphere points_sphere(const JoinedView<Vec3f>& positions, const Triangle* tris, std::size_t count) {
   Aabb box;
   for (std::size_t t = 0; t < count; ++t)
     for (std::int32_t v : tris[t]) box.extend(positions[std::size_t(v)]);
@@ -117,7 +117,7 @@ struct SplitGroup {
 // order (the same walk, so the same clusters): passing the whole mesh's count
 // made every small group pay for every vertex, and the build grew with the
 // square of the mesh.
-std::vector<std::int32_t> meshlet_parts(ArrayView<Vec3f> positions, std::vector<Triangle>* triangles,
+std::vector<std::int32_t> meshlet_parts(const JoinedView<Vec3f>& positions, std::vector<Triangle>* triangles,
                                         int cluster_triangles, int* parts) {
   thread_local MeshletScratch s;
   if (s.local.size() < positions.size()) s.local.assign(positions.size(), -1);
@@ -172,7 +172,7 @@ std::vector<std::int32_t> meshlet_parts(ArrayView<Vec3f> positions, std::vector<
 // error at 50k-100k on the bunny against 1.14x) but serialised the threads on
 // its one random state: the build took 6.7x a whole meshopt_simplify to 1 %
 // against 5.0x (same run).
-void split_group(ArrayView<Vec3f> positions, int cluster_triangles, SplitGroup* g) {
+void split_group(const JoinedView<Vec3f>& positions, int cluster_triangles, SplitGroup* g) {
   std::vector<Triangle>& triangles = g->simplified.triangles;
   g->parts = 1;
   if (triangles.size() > std::size_t(cluster_triangles))
@@ -204,7 +204,7 @@ void on_threads(std::size_t count, int threads, Work work) {
 
 // Triangles cut into clusters run by run, each run [starts[r], starts[r + 1])
 // on its own core; meshlets never cross runs.
-SplitGroup split_runs(ArrayView<Vec3f> positions, const std::vector<std::size_t>& starts, int cluster_triangles,
+SplitGroup split_runs(const JoinedView<Vec3f>& positions, const std::vector<std::size_t>& starts, int cluster_triangles,
                       int threads, const std::function<const Triangle&(std::size_t)>& triangle) {
   const std::size_t runs = starts.size() - 1;
   std::vector<SplitGroup> parts(runs);
@@ -228,7 +228,7 @@ SplitGroup split_runs(ArrayView<Vec3f> positions, const std::vector<std::size_t>
   return full;
 }
 
-SplitGroup split_large_mesh(ArrayView<Vec3f> positions, const std::vector<Triangle>& triangles,
+SplitGroup split_large_mesh(const JoinedView<Vec3f>& positions, const std::vector<Triangle>& triangles,
                             int cluster_triangles, int threads) {
   Aabb box;
   for (std::size_t v = 0; v < positions.size(); ++v) box.extend(positions[v]);
@@ -326,7 +326,11 @@ WeightedGraph cluster_graph(const ClusterHierarchy& h, const std::vector<std::in
 // What every block of a build shares: the mesh and its per-vertex tables,
 // sized once.
 struct Shared {
-  ArrayView<Vec3f> positions;
+  // The mesh's vertices, then those the collapses placed (added between
+  // rounds, never while groups are simplified).
+  JoinedView<Vec3f> positions;
+  std::vector<Vec3f> added_positions, added_normals;
+  std::vector<Rgb> added_colors;
   const ClusterOptions* options = nullptr;
   int threads = 1;
   std::vector<std::int32_t> weld;
@@ -336,6 +340,28 @@ struct Shared {
   SimplifyInput input;
   float error_floor = 0;
   double simplified = 0, expected = 1;
+
+  Shared() = default;
+  Shared(const Shared&) = delete;  // the views point into it
+
+  // A group's new vertices into the shared arrays and its triangles onto
+  // their indices; each is its own weld, unlocked.
+  void take_added(SimplifiedGroup* g) {
+    if (g->added_positions.empty()) return;
+    const std::int32_t first = std::int32_t(positions.size());
+    added_positions.insert(added_positions.end(), g->added_positions.begin(), g->added_positions.end());
+    added_normals.insert(added_normals.end(), g->added_normals.begin(), g->added_normals.end());
+    added_colors.insert(added_colors.end(), g->added_colors.begin(), g->added_colors.end());
+    for (std::size_t i = 0; i < g->added_positions.size(); ++i) weld.push_back(first + std::int32_t(i));
+    locked.resize(weld.size(), 0);
+    vertex_group.resize(weld.size(), -1);
+    for (Triangle& t : g->triangles)
+      for (std::int32_t& v : t)
+        if (v < 0) v = first - 1 - v;
+    g->added_positions = {};
+    g->added_normals = {};
+    g->added_colors = {};
+  }
 };
 
 // One block's clusters while its rounds run. Clusters [0, seeds) came in
@@ -456,7 +482,9 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
           }
       }
 
-    // Phase 3c: each group simplified to about half, on every core.
+    // Phase 3c: each group simplified to about half, on every core; its new
+    // vertices numbered in group order (the same on any core count); then
+    // each cut into clusters.
     std::vector<SplitGroup> result(members.size());
     std::vector<std::size_t> before(members.size(), 0);
     on_threads(members.size(), s.threads, [&](std::size_t g) {
@@ -478,22 +506,26 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
       for (double lighter : {0.5 * (1 + options.reduction), options.stall, 1.0}) {
         if (!folded(simplified, radius)) break;
         if (lighter == 1.0) {
+          simplified = SimplifiedGroup();
           simplified.triangles = tris;
-          simplified.error = 0;
           break;
         }
         simplified = simplify_group(tris, std::size_t(std::ceil(double(tris.size()) * lighter)), s.input);
       }
       if (double(simplified.triangles.size()) > options.stall * double(tris.size())) {
         // Stalled: collapses cannot remove what is left (handles, mostly).
-        // Clustering goes on from there; the deviations add up.
-        SimplifiedGroup clustered = cluster_group(simplified.triangles, target, s.input);
-        clustered.error += simplified.error;
-        simplified = std::move(clustered);
+        // Clustering the group as it came in, instead.
+        simplified = cluster_group(tris, target, s.input);
       }
-      const std::size_t kept = simplified.triangles.size();
-      if (kept > 0 && double(kept) <= options.stall * double(tris.size()))
-        split_group(s.positions, options.cluster_triangles, &result[g]);
+    });
+    std::vector<std::uint8_t> simplifies(members.size(), 0);
+    for (std::size_t g = 0; g < members.size(); ++g) {
+      const std::size_t kept = result[g].simplified.triangles.size();
+      simplifies[g] = kept > 0 && double(kept) <= options.stall * double(before[g]);
+      if (simplifies[g]) s.take_added(&result[g].simplified);
+    }
+    on_threads(members.size(), s.threads, [&](std::size_t g) {
+      if (simplifies[g]) split_group(s.positions, options.cluster_triangles, &result[g]);
     });
     for (std::int32_t v : touched) {
       s.vertex_group[std::size_t(v)] = -1;
@@ -574,7 +606,7 @@ void lock_block_borders(Shared& s, Each each) {
 // Morton curve had staircase borders, and cuts up to 1.4x the in-core
 // error at 20 k-50 k triangles of 3.3 M.) Returns the blocks' starts, the
 // end last.
-std::vector<std::size_t> kd_blocks(ArrayView<Vec3f> positions, std::vector<Triangle>* triangles, std::size_t block) {
+std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vector<Triangle>* triangles, std::size_t block) {
   auto centroid = [&](const Triangle& t) {
     return positions[std::size_t(t[0])] + positions[std::size_t(t[1])] + positions[std::size_t(t[2])];
   };
@@ -769,14 +801,15 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
         throw InputError("", "a triangle names vertex " + std::to_string(v) + " of " +
                                  std::to_string(positions.size()));
   Shared s;
-  s.positions = positions;
+  s.positions = JoinedView<Vec3f>(positions, &s.added_positions);
   s.options = &options;
   s.threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
   s.weld = weld_positions(positions);
   const float diagonal = bounds(positions).diagonal();
-  s.input.positions = positions;
-  s.input.normals = normals;
-  s.input.colors = colors;
+  s.input.positions = s.positions;
+  s.input.normals = JoinedView<Vec3f>(normals, &s.added_normals);
+  s.input.colors = JoinedView<Rgb>(colors, &s.added_colors);
+  s.input.optimal_placement = options.optimal_placement;
   s.input.scale = diagonal > 0 ? 1.f / diagonal : 1.f;
   s.input.normal_weight = options.normal_weight;
   s.input.color_weight = options.color_weight;
@@ -811,6 +844,9 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
     h = std::move(all.h);
   }
   h.pages = cluster_pages(h);
+  h.added_positions = std::move(s.added_positions);
+  h.added_normals = std::move(s.added_normals);
+  h.added_colors = std::move(s.added_colors);
   if (options.progress) options.progress(1.0);
   return h;
 }

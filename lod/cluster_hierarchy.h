@@ -71,6 +71,11 @@ struct ClusterHierarchy {
   // clusters index the spool's triangles instead, on disk until the model
   // is written (lod/triangle_spool.h). load_spooled() brings them in.
   std::shared_ptr<TriangleSpool> spool;
+  // Left by the build: the vertices its collapses placed, indexed from the
+  // count of positions it was given. add_cluster_hierarchy moves them into
+  // the model's vertices; a model file does not hold them apart.
+  std::vector<Vec3f> added_positions, added_normals;  // normals: when the mesh has them
+  std::vector<Rgb> added_colors;                      // when the mesh has them
 
   std::size_t size() const { return clusters.size(); }
   int levels() const;                 // DAG rounds, 1 for a hierarchy of one level
@@ -97,6 +102,9 @@ struct ClusterOptions {
   // 0.0005 no longer kept a scanned sphere's colour bands (tests/test_clusters).
   float normal_weight = 0.0005f;
   float color_weight = 0.002f;
+  // Each collapse places its vertex at the quadric's minimum, adding a
+  // vertex; false keeps an end of the edge and adds none.
+  bool optimal_placement = true;
   int threads = 0;               // 0: every core
   // Above 0, a mesh of more triangles is built in blocks of about this many,
   // so that the build's working memory is a block's, not the mesh's: each
@@ -126,9 +134,9 @@ std::vector<ClusterPage> cluster_pages(const ClusterHierarchy& h);
 // Builds the hierarchy over `triangles`, which index `positions` (and
 // `normals`, `colors` when those are not empty, one per position). The
 // triangles are taken as they are: they are the finest cut, in cluster order.
-// Vertices with equal positions are treated as one for adjacency and locking;
-// simplification only ever keeps existing vertices (half-edge collapse), so
-// the hierarchy adds none. Throws InputError when there are no triangles.
+// Vertices with equal positions are treated as one for adjacency and locking.
+// With optimal_placement the collapses add vertices (ClusterHierarchy::
+// added_positions). Throws InputError when there are no triangles.
 ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
                                          ArrayView<Rgb> colors, std::vector<Triangle> triangles,
                                          const ClusterOptions& options = {});

@@ -13,6 +13,9 @@ namespace {
 
 constexpr int kMaxDim = 9;                   // position, normal, colour
 constexpr int kUpper = kMaxDim * (kMaxDim + 1) / 2;
+// A pivot below this share of the largest diagonal entry is a direction the
+// quadric does not constrain.
+constexpr double kSingular = 1e-9;
 // Boundary constraint planes weigh this much per unit of squared edge length,
 // against the faces' area: a real boundary then moves along itself, not inwards.
 constexpr double kBoundaryWeight = 4.0;
@@ -39,6 +42,45 @@ struct Quadric {
       k += kMaxDim - dim;  // skip the unused columns of this row
     }
     return e;
+  }
+  // The point where the quadric is least (A x = -b), into `out`; false
+  // where A is near singular (a flat or straight neighbourhood, where any
+  // point along it is as good and the solve would wander). LDL^T by hand:
+  // Eigen's with its condition estimate took half the hierarchy's build.
+  bool minimum(int dim, double* out) const {
+    double m[kMaxDim][kMaxDim], y[kMaxDim];
+    int k = 0;
+    double largest = 0;
+    for (int i = 0; i < dim; ++i) {
+      for (int j = i; j < dim; ++j) m[j][i] = a[std::size_t(k++)];
+      k += kMaxDim - dim;
+      largest = std::max(largest, std::abs(m[i][i]));
+    }
+    if (!(largest > 0)) return false;
+    for (int j = 0; j < dim; ++j) {  // lower triangle: L below, D on the diagonal
+      double d = m[j][j];
+      for (int k2 = 0; k2 < j; ++k2) d -= m[j][k2] * m[j][k2] * m[k2][k2];
+      if (!(d > kSingular * largest)) return false;
+      m[j][j] = d;
+      for (int i = j + 1; i < dim; ++i) {
+        double v = m[i][j];
+        for (int k2 = 0; k2 < j; ++k2) v -= m[i][k2] * m[j][k2] * m[k2][k2];
+        m[i][j] = v / d;
+      }
+    }
+    for (int i = 0; i < dim; ++i) {
+      double v = -b[std::size_t(i)];
+      for (int k2 = 0; k2 < i; ++k2) v -= m[i][k2] * y[k2];
+      y[i] = v;
+    }
+    for (int i = 0; i < dim; ++i) y[i] /= m[i][i];
+    for (int i = dim - 1; i >= 0; --i) {
+      double v = y[i];
+      for (int k2 = i + 1; k2 < dim; ++k2) v -= m[k2][i] * out[k2];
+      if (!std::isfinite(v)) return false;
+      out[i] = v;
+    }
+    return true;
   }
   // Adds w * (I - sum e e^T) for the orthonormal `basis` of a plane through q.
   void add_plane(const double* q, const double (*basis)[kMaxDim], int basis_size, int dim, double w) {
@@ -136,14 +178,17 @@ void classify(GroupTopology* g) {
 struct Candidate {
   float cost;
   int from, to;
+  int meeting;  // its slot in the meetings computed at push
   bool operator>(const Candidate& o) const { return cost > o.cost; }
 };
 
-// Phase: may `from` move onto `to`? Border vertices only slide along their
-// border; the edge's link must be its one or two opposite vertices (no fold
-// into a non-manifold); no triangle may turn over or collapse; and no new edge
-// may join two locked vertices, which a neighbouring group might join too.
-bool collapse_allowed(GroupTopology* g, int from, int to, const std::vector<std::array<double, kMaxDim>>& x) {
+// Phase: may `from` and `to` merge into one vertex at `target`? Border
+// vertices only slide along their border; the edge's link must be its one or
+// two opposite vertices (no fold into a non-manifold); no triangle may turn
+// over or collapse; and no new edge may join two locked vertices, which a
+// neighbouring group might join too.
+bool collapse_allowed(GroupTopology* g, int from, int to, const Eigen::Vector3d& target,
+                      const std::vector<std::array<double, kMaxDim>>& x) {
   if (g->locked[std::size_t(from)]) return false;
   int shared = 0;
   for (int t : g->incident[std::size_t(from)])
@@ -188,16 +233,16 @@ bool collapse_allowed(GroupTopology* g, int from, int to, const std::vector<std:
     }
   }
 
-  // No triangle around `from` turns over or becomes a sliver.
-  const Eigen::Vector3d target(x[std::size_t(to)][0], x[std::size_t(to)][1], x[std::size_t(to)][2]);
-  for (int t : g->incident[std::size_t(from)]) {
+  // No triangle around either turns over or becomes a sliver.
+  for (const int end : {from, to})
+  for (int t : g->incident[std::size_t(end)]) {
     if (g->dead[std::size_t(t)] || other_count(*g, t, from, to)) continue;
     const auto& tri = g->tris[std::size_t(t)];
     Eigen::Vector3d p[3], q[3];
     for (int k = 0; k < 3; ++k) {
       const auto& xv = x[std::size_t(tri[std::size_t(k)])];
       p[k] = Eigen::Vector3d(xv[0], xv[1], xv[2]);
-      q[k] = tri[std::size_t(k)] == from ? target : p[k];
+      q[k] = tri[std::size_t(k)] == from || tri[std::size_t(k)] == to ? target : p[k];
     }
     const Eigen::Vector3d before = (p[1] - p[0]).cross(p[2] - p[0]), after = (q[1] - q[0]).cross(q[2] - q[0]);
     const double a = after.norm();
@@ -210,19 +255,21 @@ bool collapse_allowed(GroupTopology* g, int from, int to, const std::vector<std:
   return true;
 }
 
-// Phase: the group's error, measured: how far each removed vertex lies from
-// the triangles around the vertex it went to (a one-sided Hausdorff distance
-// over the group's vertices, in scaled units).
-double removed_vertex_distance(GroupTopology& g, std::vector<int>& moved_to,
+// Phase: the group's error, measured: how far each vertex that went or
+// moved lies, where it was, from the triangles around the vertex that stands
+// for it now (a one-sided Hausdorff distance over the group's vertices, in
+// scaled units).
+double removed_vertex_distance(GroupTopology& g, std::vector<int>& moved_to, const std::vector<std::uint8_t>& moved,
+                               const std::vector<std::array<double, kMaxDim>>& origin,
                                const std::vector<std::array<double, kMaxDim>>& x) {
   auto point = [&](int v) { return Eigen::Vector3d(x[std::size_t(v)][0], x[std::size_t(v)][1], x[std::size_t(v)][2]); };
   double worst = 0;
   for (std::size_t r = 0; r < moved_to.size(); ++r) {
-    if (moved_to[r] < 0) continue;
-    int rep = moved_to[r];
+    if (moved_to[r] < 0 && !moved[r]) continue;
+    int rep = int(r);
     while (moved_to[std::size_t(rep)] >= 0) rep = moved_to[std::size_t(rep)];
-    moved_to[r] = rep;  // shortens the chain for the next ones
-    const Eigen::Vector3d p = point(int(r));
+    if (moved_to[r] >= 0) moved_to[r] = rep;  // shortens the chain for the next ones
+    const Eigen::Vector3d p(origin[r][0], origin[r][1], origin[r][2]);
     double nearest = std::numeric_limits<double>::infinity();
     for (int t : g.incident[std::size_t(rep)]) {
       if (g.dead[std::size_t(t)]) continue;
@@ -278,7 +325,7 @@ std::vector<std::int32_t> load_group(const std::vector<Triangle>& triangles, con
 // when weighted), with border planes so that borders slide along themselves.
 void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& global, const SimplifyInput& in,
                     bool use_normals, bool use_colors, GroupQuadrics* quadrics) {
-  const ArrayView<Vec3f> positions = in.positions;
+  const JoinedView<Vec3f>& positions = in.positions;
   GroupQuadrics& q = *quadrics;
   const std::size_t nv = global.size();
   q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
@@ -329,21 +376,87 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
 
 }
 
-// Phase 3: collapses the cheapest edge first until `target` triangles are
-// left. Returns, per vertex, where it went (-1: kept).
-std::vector<int> collapse_to_target(std::size_t target, GroupTopology* group, GroupQuadrics* quadrics) {
+// Where two vertices meet when their edge collapses, and what it costs there.
+struct Meeting {
+  float cost = 0;
+  bool swap = false;  // `to` goes onto `from`, which stays where it is
+  std::uint32_t from_version = 0, to_version = 0;  // of the quadrics it was computed from
+  std::array<double, kMaxDim> x{};
+};
+
+// Phase 3a: the meeting point of `from` and `to`. At the minimum of their
+// summed quadric (Garland and Heckbert, 1997), attributes included, where it
+// lies within an edge length of the edge's middle; else at an end or the
+// middle, whichever costs least. A locked vertex stays where it is, and so
+// does a border vertex joined by one inside.
+Meeting meeting(const GroupTopology& g, const GroupQuadrics& q, int from, int to, bool optimal) {
+  const std::size_t f = std::size_t(from), t = std::size_t(to);
+  Meeting m;
+  const bool to_fixed = g.locked[t] || (g.border[t] && !g.border[f]);
+  if (to_fixed || !optimal) {
+    m.x = q.x[t];
+    m.cost = float(std::max(0.0, q.full[f].evaluate(m.x.data(), q.dim) + q.full[t].evaluate(m.x.data(), q.dim)));
+    return m;
+  }
+  Quadric sum = q.full[f];
+  sum.add(q.full[t]);
+  const double* a = q.x[f].data();
+  const double* b = q.x[t].data();
+  double length2 = 0, off2 = 0;
+  for (int i = 0; i < 3; ++i) length2 += (a[i] - b[i]) * (a[i] - b[i]);
+  if (sum.minimum(q.dim, m.x.data())) {
+    for (int i = 0; i < 3; ++i) off2 += (m.x[std::size_t(i)] - 0.5 * (a[i] + b[i])) * (m.x[std::size_t(i)] - 0.5 * (a[i] + b[i]));
+    if (off2 <= length2) {
+      double at = sum.c;  // x^T A x + 2 b^T x + c where A x = -b
+      for (int i = 0; i < q.dim; ++i) at += sum.b[std::size_t(i)] * m.x[std::size_t(i)];
+      m.cost = float(std::max(0.0, at));
+      return m;
+    }
+  }
+  std::array<double, kMaxDim> middle{};
+  for (int i = 0; i < q.dim; ++i) middle[std::size_t(i)] = 0.5 * (a[i] + b[i]);
+  const double at_to = sum.evaluate(b, q.dim), at_from = sum.evaluate(a, q.dim), at_middle = sum.evaluate(middle.data(), q.dim);
+  m.x = q.x[t];
+  double best = at_to;
+  if (at_middle < best) best = at_middle, m.x = middle;
+  if (at_from < best && !g.border[t]) best = at_from, m.x = q.x[f], m.swap = true;
+  m.cost = float(std::max(0.0, best));
+  return m;
+}
+
+// Phase 3b: collapses the cheapest edge first until `target` triangles are
+// left. Returns, per vertex, where it went (-1: kept); `moved` marks the
+// kept vertices that are no longer where they were.
+std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopology* group, GroupQuadrics* quadrics,
+                                    std::vector<std::uint8_t>* moved) {
   GroupTopology& g = *group;
   GroupQuadrics& q = *quadrics;
   const std::size_t nv = q.x.size();
-  auto cost = [&](int from, int to) {  // the quadrics' sum, evaluated as a sum: no copy
-    const double* x = q.x[std::size_t(to)].data();
-    return float(std::max(0.0, q.full[std::size_t(from)].evaluate(x, q.dim) + q.full[std::size_t(to)].evaluate(x, q.dim)));
+  // Meetings as computed at push, reused at pop while neither quadric has
+  // changed since: computing each twice was a quarter of the build.
+  thread_local std::vector<Meeting> meetings;
+  meetings.clear();
+  std::vector<std::uint32_t> version(nv, 0);
+  auto candidate = [&](int from, int to) {
+    Meeting m = meeting(g, q, from, to, optimal);
+    m.from_version = version[std::size_t(from)], m.to_version = version[std::size_t(to)];
+    meetings.push_back(m);
+    return Candidate{m.cost, from, to, int(meetings.size() - 1)};
   };
   std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> heap;
   std::vector<std::uint8_t> removed(nv, 0);
+  moved->assign(nv, 0);
   std::vector<int> moved_to(nv, -1);  // where each removed vertex went
   std::vector<int> around;
-  auto push_around = [&](int v) {  // both directions of each edge at v, once
+  // Both directions of an edge, or one where both ends move freely (they
+  // meet at the same point either way).
+  auto push_edge = [&](int v, int w) {
+    const bool v_free = !g.locked[std::size_t(v)] && !g.border[std::size_t(v)];
+    const bool w_free = !g.locked[std::size_t(w)] && !g.border[std::size_t(w)];
+    if (!g.locked[std::size_t(v)]) heap.push(candidate(v, w));
+    if (!g.locked[std::size_t(w)] && !(optimal && v_free && w_free)) heap.push(candidate(w, v));
+  };
+  auto push_around = [&](int v) {  // each edge at v, once
     around.clear();
     for (int t : g.incident[std::size_t(v)]) {
       if (g.dead[std::size_t(t)]) continue;
@@ -352,11 +465,10 @@ std::vector<int> collapse_to_target(std::size_t target, GroupTopology* group, Gr
     }
     for (int w : around) {
       g.mark[std::size_t(w)] = 0;
-      if (!g.locked[std::size_t(v)]) heap.push({cost(v, w), v, w});
-      if (!g.locked[std::size_t(w)]) heap.push({cost(w, v), w, v});
+      push_edge(v, w);
     }
   };
-  // Initially each edge once per direction: from its smaller end.
+  // Initially each edge once: from its smaller end.
   for (std::size_t v = 0; v < nv; ++v) {
     around.clear();
     for (int t : g.incident[v])
@@ -364,23 +476,29 @@ std::vector<int> collapse_to_target(std::size_t target, GroupTopology* group, Gr
         if (w > int(v) && !g.mark[std::size_t(w)]) g.mark[std::size_t(w)] = 1, around.push_back(w);
     for (int w : around) {
       g.mark[std::size_t(w)] = 0;
-      if (!g.locked[v]) heap.push({cost(int(v), w), int(v), w});
-      if (!g.locked[std::size_t(w)]) heap.push({cost(w, int(v)), w, int(v)});
+      push_edge(int(v), w);
     }
   }
   std::size_t live = g.tris.size();
   while (live > target && !heap.empty()) {
-    const Candidate c = heap.top();
+    Candidate c = heap.top();
     heap.pop();
     if (removed[std::size_t(c.from)] || removed[std::size_t(c.to)]) continue;
     // Stale entries: costs only grow as quadrics merge, so recompute and requeue.
-    const float now = cost(c.from, c.to);
-    if (now > c.cost * 1.0001f + 1e-30f) {
-      heap.push({now, c.from, c.to});
-      continue;
+    if (meetings[std::size_t(c.meeting)].from_version != version[std::size_t(c.from)] ||
+        meetings[std::size_t(c.meeting)].to_version != version[std::size_t(c.to)]) {
+      const Candidate now = candidate(c.from, c.to);
+      if (now.cost > c.cost * 1.0001f + 1e-30f) {
+        heap.push(now);
+        continue;
+      }
+      c.meeting = now.meeting;
     }
-    if (!collapse_allowed(&g, c.from, c.to, q.x)) continue;
-    // Apply: triangles on the edge die, the rest of from's move to `to`.
+    const Meeting m = meetings[std::size_t(c.meeting)];
+    if (m.swap) std::swap(c.from, c.to);
+    if (!collapse_allowed(&g, c.from, c.to, Eigen::Vector3d(m.x[0], m.x[1], m.x[2]), q.x)) continue;
+    // Apply: triangles on the edge die, the rest of from's move to `to`,
+    // which moves to the meeting point.
     for (int t : g.incident[std::size_t(c.from)]) {
       if (g.dead[std::size_t(t)]) continue;
       if (other_count(g, t, c.from, c.to)) {
@@ -394,7 +512,10 @@ std::vector<int> collapse_to_target(std::size_t target, GroupTopology* group, Gr
     }
     removed[std::size_t(c.from)] = 1;
     moved_to[std::size_t(c.from)] = c.to;
+    if (!std::equal(m.x.begin(), m.x.begin() + q.dim, q.x[std::size_t(c.to)].begin()))
+      q.x[std::size_t(c.to)] = m.x, (*moved)[std::size_t(c.to)] = 1;
     q.full[std::size_t(c.to)].add(q.full[std::size_t(c.from)]);
+    ++version[std::size_t(c.to)];
     auto& list = g.incident[std::size_t(c.to)];
     list.erase(std::remove_if(list.begin(), list.end(), [&](int t) { return g.dead[std::size_t(t)] != 0; }),
                list.end());
@@ -410,17 +531,51 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
   const bool use_colors = in.color_weight > 0 && !in.colors.empty();
   thread_local GroupTopology g;
   thread_local GroupQuadrics q;  // reused: a group's quadrics are about a megabyte
+  thread_local std::vector<std::array<double, kMaxDim>> origin;
+  thread_local std::vector<std::uint8_t> moved;
   std::vector<int>& local = group_local_index(in.positions.size());
   const std::vector<std::int32_t> global = load_group(triangles, in, local, &g);
   group_quadrics(g, global, in, use_normals, use_colors, &q);
-  std::vector<int> moved_to = collapse_to_target(target, &g, &q);
+  origin = q.x;
+  std::vector<int> moved_to = collapse_to_target(target, in.optimal_placement, &g, &q, &moved);
 
+  // Moved vertices become new ones, numbered -1, -2, ... in the order of
+  // their first use.
   SimplifiedGroup out;
-  for (std::size_t t = 0; t < g.tris.size(); ++t)
-    if (!g.dead[t])
-      out.triangles.push_back({global[std::size_t(g.tris[t][0])], global[std::size_t(g.tris[t][1])],
-                               global[std::size_t(g.tris[t][2])]});
-  out.error = float(removed_vertex_distance(g, moved_to, q.x) / in.scale);
+  std::vector<std::int32_t> id(global.begin(), global.end());
+  for (std::size_t t = 0; t < g.tris.size(); ++t) {
+    if (g.dead[t]) continue;
+    Triangle tri;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t v = std::size_t(g.tris[t][std::size_t(k)]);
+      if (moved[v] == 1) {
+        moved[v] = 2;
+        id[v] = -1 - std::int32_t(out.added_positions.size());
+        const double* x = q.x[v].data();
+        out.added_positions.push_back(Vec3f(float(x[0] / in.scale), float(x[1] / in.scale), float(x[2] / in.scale)));
+        if (!in.normals.empty()) {
+          Vec3f n = in.normals[std::size_t(global[v])];
+          if (use_normals) {
+            const Vec3f solved{float(x[3]), float(x[4]), float(x[5])};
+            if (solved.norm() > 0) n = solved.normalized();
+          }
+          out.added_normals.push_back(n);
+        }
+        if (!in.colors.empty()) {
+          Rgb c = in.colors[std::size_t(global[v])];
+          if (use_colors) {
+            const int at = use_normals ? 6 : 3;
+            for (int i = 0; i < 3; ++i)
+              c[std::size_t(i)] = std::uint8_t(std::clamp(std::lround(x[at + i] / in.color_weight * 255.0), 0L, 255L));
+          }
+          out.added_colors.push_back(c);
+        }
+      }
+      tri[std::size_t(k)] = id[v];
+    }
+    out.triangles.push_back(tri);
+  }
+  out.error = float(removed_vertex_distance(g, moved_to, moved, origin, q.x) / in.scale);
   for (std::int32_t v : global) local[std::size_t(v)] = -1;
   return out;
 }

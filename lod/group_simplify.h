@@ -1,9 +1,10 @@
-// One group of the cluster hierarchy simplified by half-edge collapse under
+// One group of the cluster hierarchy simplified by edge collapse under
 // generalized quadrics (Garland and Heckbert, *Simplifying Surfaces with Color
 // and Texture using Quadric Error Metrics*, 1998): positions, normals and
-// colours in one quadric, so attributes survive at every level. Vertices the
-// group shares with others are locked; the scan's real boundaries slide along
-// themselves under boundary constraint planes.
+// colours in one quadric, so attributes survive at every level, and each
+// merged vertex placed where that quadric is least, attributes with it.
+// Vertices the group shares with others are locked; the scan's real
+// boundaries slide along themselves under boundary constraint planes.
 //
 // Our own collapse loop, not OpenMesh's Decimater: see the measurement in
 // lod/README.md ("Why not OpenMesh's Decimater").
@@ -18,18 +19,26 @@ namespace scan2lod {
 
 // What the simplifier reads of the mesh: shared by every group.
 struct SimplifyInput {
-  ArrayView<Vec3f> positions;
-  ArrayView<Vec3f> normals;  // empty or one per position
-  ArrayView<Rgb> colors;     // empty or one per position
+  JoinedView<Vec3f> positions;
+  JoinedView<Vec3f> normals;  // empty or one per position
+  JoinedView<Rgb> colors;     // empty or one per position
   // locked[v] != 0: v is shared with another group and must not move.
   const std::vector<std::uint8_t>* locked = nullptr;
   float scale = 1;           // 1 / the mesh's diagonal: quadrics see a unit-sized mesh
   float normal_weight = 0;   // see ClusterOptions
   float color_weight = 0;
+  // A collapse places the vertex at its quadric's minimum (a new vertex);
+  // false keeps one of the edge's ends (half-edge collapse, no new vertex).
+  bool optimal_placement = true;
 };
 
 struct SimplifiedGroup {
-  std::vector<Triangle> triangles;  // into the same positions
+  // Into the same positions, or -1 - i into added_* for a vertex the
+  // simplification placed anew.
+  std::vector<Triangle> triangles;
+  std::vector<Vec3f> added_positions;
+  std::vector<Vec3f> added_normals;  // when the input has normals
+  std::vector<Rgb> added_colors;     // when the input has colours
   // Measured, in the mesh's units: the largest distance from a removed vertex
   // to the triangles around the vertex it went to.
   float error = 0;

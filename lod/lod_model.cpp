@@ -42,6 +42,28 @@ LodModel model_from_octree(McOctree tree, LodArray lod) {
   return model;
 }
 
+namespace {
+
+// The vertices the hierarchy's collapses placed, after the model's: they were
+// numbered from its count. The hierarchy's range grows to take them in.
+void take_added_vertices(LodModel* model) {
+  ClusterHierarchy& h = *model->clusters;
+  VertexArray& v = model->vertices;
+  if (!h.added_positions.empty()) {
+    if (model->cluster_vertex_first + model->cluster_vertex_count != v.size())
+      model->cluster_vertex_count = v.size() - model->cluster_vertex_first;
+    v.positions.insert(v.positions.end(), h.added_positions.begin(), h.added_positions.end());
+    if (!v.normals.empty()) v.normals.insert(v.normals.end(), h.added_normals.begin(), h.added_normals.end());
+    if (!v.colors.empty()) v.colors.insert(v.colors.end(), h.added_colors.begin(), h.added_colors.end());
+    model->cluster_vertex_count += h.added_positions.size();
+  }
+  h.added_positions = {};
+  h.added_normals = {};
+  h.added_colors = {};
+}
+
+}  // namespace
+
 void add_cluster_hierarchy(LodModel* model, TriangleMesh&& mesh, bool shares_vertices, const ClusterOptions& options) {
   VertexArray& v = model->vertices;
   std::size_t first = 0;
@@ -50,6 +72,7 @@ void add_cluster_hierarchy(LodModel* model, TriangleMesh&& mesh, bool shares_ver
     model->clusters = build_cluster_hierarchy(v.positions, v.normals, v.colors, std::move(mesh.triangles), options);
     model->cluster_vertex_first = 0;
     model->cluster_vertex_count = count;
+    take_added_vertices(model);
     return;
   }
   if (v.positions.empty()) {
@@ -86,6 +109,7 @@ void add_cluster_hierarchy(LodModel* model, TriangleMesh&& mesh, bool shares_ver
   model->clusters = build_cluster_hierarchy(v.positions, v.normals, v.colors, std::move(mesh.triangles), options);
   model->cluster_vertex_first = first;
   model->cluster_vertex_count = count;
+  take_added_vertices(model);
 }
 
 void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool shares_vertices,
@@ -95,6 +119,7 @@ void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool share
                                               model->vertices.colors, mesh.triangles, options);
     model->cluster_vertex_first = 0;
     model->cluster_vertex_count = mesh.positions.size();
+    take_added_vertices(model);
     return;
   }
   add_cluster_hierarchy(model, TriangleMesh(mesh), false, options);

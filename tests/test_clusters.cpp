@@ -59,9 +59,19 @@ TEST(ClusterHierarchy, FinestCutIsTheInputMesh) {
   EXPECT_EQ(sorted_rotated(cut.triangles), sorted_rotated(b.mesh.triangles));
   const LevelCut& all = extractor.extract(LevelRequest::at_percent(100));
   EXPECT_EQ(all.triangles.size(), b.mesh.triangles.size());
-  // The shared vertices are the mesh's own, unmoved.
-  ASSERT_EQ(b.model.vertices.size(), b.mesh.positions.size());
+  // The shared vertices are the mesh's own, unmoved, then those the
+  // collapses placed: each used by some coarser cluster, and fewer than the
+  // mesh's.
+  ASSERT_GE(b.model.vertices.size(), b.mesh.positions.size());
   EXPECT_TRUE(std::equal(b.mesh.positions.begin(), b.mesh.positions.end(), b.model.vertices.positions.begin()));
+  const std::size_t added = b.model.vertices.size() - b.mesh.positions.size();
+  EXPECT_GT(added, 0u);
+  EXPECT_LT(added, b.mesh.positions.size());
+  EXPECT_EQ(b.model.cluster_vertex_count, b.model.vertices.size());
+  std::vector<std::uint8_t> used(b.model.vertices.size(), 0);
+  for (const Triangle& t : b.model.clusters->triangles)
+    for (std::int32_t v : t) used[std::size_t(v)] = 1;
+  EXPECT_EQ(std::count(used.begin() + std::ptrdiff_t(b.mesh.positions.size()), used.end(), 0), 0);
 }
 
 TEST(ClusterHierarchy, GoesDownToAFewHundredTrianglesAndStoresAboutTwiceTheMesh) {
@@ -88,6 +98,30 @@ TEST(ClusterHierarchy, EveryUniformCutIsAsSoundAsTheFullMesh) {
     ++checked;
   }
   EXPECT_GT(checked, 10);
+}
+
+// Each collapse puts its vertex where the summed quadric is least (Garland
+// and Heckbert, 1997), not at an end of the edge: closer cuts, for fewer new
+// vertices than the mesh has.
+TEST(ClusterHierarchy, VerticesAtTheQuadricMinimumMakeCloserCuts) {
+  const Built& b = bunny128();
+  LodModel ends;
+  ClusterOptions half_edge;
+  half_edge.optimal_placement = false;
+  add_cluster_hierarchy(&ends, b.mesh, false, half_edge);
+  EXPECT_EQ(ends.vertices.size(), b.mesh.positions.size()) << "half-edge collapses add no vertex";
+  LevelExtractor optimal(b.model, LodStructure::kClusters), endpoint(ends, LodStructure::kClusters);
+  for (std::int64_t budget : {2000, 10000, 40000}) {
+    auto error = [&](LevelExtractor& e) {
+      const TriangleMesh cut = compact_level(e.model(), e.extract(LevelRequest::at_triangles(budget)).triangles);
+      const SurfaceComparison c = compare_surfaces(cut, b.mesh, CompareOptions{100000, 1});
+      return (c.a_to_b.mean + c.b_to_a.mean) / c.diagonal;
+    };
+    const double with = error(optimal), without = error(endpoint);
+    std::printf("%lld triangles: %.3g at the minimum, %.3g at an end (%.2fx)\n", (long long)budget, with, without,
+                with / without);
+    EXPECT_LT(with, without) << budget << " triangles";
+  }
 }
 
 // A strict budget gets the finest cut that fits; a plain one that cut too,
