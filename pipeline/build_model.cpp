@@ -50,8 +50,10 @@ double resident_bytes() {
 
 // The cluster hierarchy in blocks: what stays in memory through the build is
 // the mesh's vertices and the hierarchy's per-vertex tables (about 45 bytes a
-// vertex, 0.5 vertices a triangle), the full triangles until the first pass
-// ends and half of them carried (18 bytes a triangle); what a block adds is
+// vertex, 0.5 vertices a triangle), the vertices its collapses place with
+// their tables (36 bytes, 0.3 a triangle: 958 k for 3.24 M triangles), the
+// full triangles until the first pass ends and two thirds of them carried
+// (20 bytes a triangle); what a block adds is
 // about kBlockBytesPerTriangle of its triangles (3.3 M triangles under a
 // 400 MiB budget: blocks of 354 k, peak 353 MiB, set in the weld). The rest
 // of the budget sizes the blocks, never below kSmallestBlock: a budget too
@@ -60,7 +62,7 @@ constexpr double kBlockBytesPerTriangle = 400.0;
 constexpr std::int64_t kSmallestBlock = 65536;
 // The cluster stage's peak in blocks of `block` triangles.
 double blocked_cluster_bytes(std::size_t triangles, std::int64_t block) {
-  return resident_bytes() + double(triangles) * (0.5 * 45.0 + 18.0) + double(block) * kBlockBytesPerTriangle;
+  return resident_bytes() + double(triangles) * (0.5 * 45.0 + 0.3 * 36.0 + 20.0) + double(block) * kBlockBytesPerTriangle;
 }
 
 std::int64_t cluster_block_for(double budget, std::size_t triangles, BuildReport* report) {

@@ -74,11 +74,11 @@ TEST(ClusterHierarchy, FinestCutIsTheInputMesh) {
   EXPECT_EQ(std::count(used.begin() + std::ptrdiff_t(b.mesh.positions.size()), used.end(), 0), 0);
 }
 
-TEST(ClusterHierarchy, GoesDownToAFewHundredTrianglesAndStoresAboutTwiceTheMesh) {
+TEST(ClusterHierarchy, GoesDownToAFewHundredTrianglesAndStoresUnderTwoAndAHalfTimesTheMesh) {
   const Built& b = bunny128();
   LevelExtractor extractor(b.model, LodStructure::kClusters);
   EXPECT_LE(extractor.coarsest_triangles(), 256);
-  EXPECT_LE(double(b.model.clusters->triangles.size()), 2.2 * double(b.mesh.triangles.size()));
+  EXPECT_LE(double(b.model.clusters->triangles.size()), 2.4 * double(b.mesh.triangles.size()));
 }
 
 TEST(ClusterHierarchy, EveryUniformCutIsAsSoundAsTheFullMesh) {
