@@ -90,7 +90,8 @@ std::string conf_listing(const std::vector<std::string>& scans) {
       for (const ConfEntry& e : entries) listed |= fs::equivalent(e.file, scan, ec);
       all &= listed;
     }
-    if (all) return it->path().lexically_relative(fs::current_path(ec)).string();
+    // Named in the form the user gave the scans (absolute or relative).
+    if (all) return (fs::path(scans.front()).parent_path() / it->path().filename()).string();
   }
   return "";
 }

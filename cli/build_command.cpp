@@ -30,9 +30,9 @@ void add_build_command(CLI::App& app) {
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
-      "build", "Range scans, organized clouds or a mesh -> LOD model (.mco): marching-cube octree and LOD array");
+      "build", "Range scans, point clouds or a mesh -> LOD model (.mco): marching-cube octree and LOD array");
   cmd->add_option("inputs", args->inputs,
-                  "A .conf, range-grid PLYs, organized PCDs, or a mesh (.ply .obj .off .stl .glb .gltf)")
+                  kInputsHelp)
       ->required();
   cmd->add_option("-o,--output", args->output, "Output model (.mco)")->required();
   add_reconstruct_flags(cmd, &args->flags);

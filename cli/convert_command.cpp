@@ -1,6 +1,7 @@
 #include "acquisition/scan_set.h"
 #include "cli/commands.h"
 #include "cli/terminal.h"
+#include "cli/usage.h"
 #include "io/atomic_file.h"
 
 #include <nlohmann/json.hpp>
@@ -27,12 +28,12 @@ void add_convert_command(CLI::App& app) {
   cmd->add_option("inputs", args->inputs, "A .conf, range-grid PLYs or organized PCDs")->required();
   cmd->add_option("-o,--output", args->output, "Output folder")->required();
   cmd->add_option("--conf", args->conf_name, "Name of the .conf written in the folder")->capture_default_str();
-  cmd->add_option("-j,--threads", args->threads, "Threads (0: all cores)")->capture_default_str();
+  add_threads_option(cmd, &args->threads);
   cmd->add_flag("--json", args->json, "Print the counts as JSON");
   cmd->callback([args] {
     const auto start = std::chrono::steady_clock::now();
     check_output_folder(args->output);
-    std::vector<PlacedScan> scans = read_scan_set(args->inputs, args->threads);
+    std::vector<PlacedScan> scans = read_scan_set(args->inputs, usable_threads(args->threads));
     write_scan_set(args->output, scans, args->conf_name);
     std::size_t samples = 0;
     for (const PlacedScan& s : scans)

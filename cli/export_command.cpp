@@ -2,6 +2,7 @@
 // model load. glTF (.glb, .gltf) holds them as one MSFT_lod chain over shared
 // vertices (io/gltf_file.h); a mesh format writes one file per level.
 #include "cli/commands.h"
+#include "cli/level_warnings.h"
 #include "cli/outputs.h"
 #include "cli/terminal.h"
 #include "core/error.h"
@@ -18,7 +19,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <sstream>
 
 namespace scan2lod::cli {
 namespace {
@@ -42,6 +45,28 @@ std::vector<LevelRequest> requests_from(const std::vector<double>& percents, con
   }
   return requests;
 }
+
+// `values` without repeats, first occurrences in order; warns once naming the
+// repeats (`flag` names the list), as a level asked twice would be written twice.
+template <typename T>
+std::vector<T> without_repeats(const std::vector<T>& values, const std::string& flag, Warnings& warnings) {
+  std::vector<T> kept;
+  std::string repeats;
+  for (const T& v : values) {
+    if (std::find(kept.begin(), kept.end(), v) == kept.end()) {
+      kept.push_back(v);
+      continue;
+    }
+    std::ostringstream text;
+    text << v;
+    if (repeats.find(" " + text.str() + ",") == std::string::npos) repeats += " " + text.str() + ",";
+  }
+  if (!repeats.empty())
+    warnings(flag + " repeats" + repeats.substr(0, repeats.size() - 1) + "; each level is written once");
+  return kept;
+}
+
+const char* const kExportFormats = ".glb or .gltf (one file), or .ply, .obj, .off, .stl or .vtp (a file per level)";
 
 // "out/bunny.ply" and level i -> "out/bunny_LOD<i>.ply".
 std::string level_path(const std::string& output, const std::string& format, std::size_t i) {
@@ -70,7 +95,8 @@ void add_export_command(CLI::App& app) {
   cmd->add_option("--structure", args->structure, "clusters or octree (default: clusters when the model has them)")
       ->check(CLI::IsMember({"clusters", "octree"}, CLI::ignore_case));
   CLI::Option* levels = cmd->add_option("--levels", args->percents,
-                                        "Levels as percentages, e.g. 100,25,5,1 (the default)")
+                                        "Levels as percentages, e.g. 100,25,5,1 (the default); a repeated one is "
+                                        "written once")
                             ->delimiter(',');
   CLI::Option* budgets = cmd->add_option("--triangles", args->budgets,
                                          "Levels as triangle budgets, e.g. 200000,50000,10000,2000, each met within "
@@ -81,20 +107,37 @@ void add_export_command(CLI::App& app) {
   cmd->add_option("--format", args->format, "glb, gltf, ply, obj, off, stl or vtp (default: -o's extension)")
       ->check(CLI::IsMember({"glb", "gltf", "ply", "obj", "off", "stl", "vtp"}, CLI::ignore_case));
   cmd->add_flag("--no-quantize", args->no_quantize, "glTF: 32-bit float positions and normals");
-  cmd->add_option("--pixel-error", args->pixel_error,
-                  "glTF screen coverage: a level is drawn while its error spans at most this many pixels")
-      ->default_val(1);
-  cmd->add_option("--height", args->height, "glTF screen coverage: screen height in pixels")->default_val(1080);
-  cmd->add_flag("--json", args->json, "Print the levels, files and timings as JSON");
-  cmd->callback([args] {
-    if (args->percents.empty() && args->budgets.empty()) args->percents = {100, 25, 5, 1};
+  // Only glTF stores screen coverage: with a mesh format they would change nothing.
+  const std::vector<CLI::Option*> coverage_flags = {
+      cmd->add_option("--pixel-error", args->pixel_error,
+                      "glTF only: screen coverage, a level is drawn while its error spans at most this many pixels")
+          ->default_val(1),
+      cmd->add_option("--height", args->height, "glTF only: screen coverage, screen height in pixels")
+          ->default_val(1080)};
+  cmd->add_flag("--json", args->json, "Print the levels, files, timings and any warnings (\"warnings\") as JSON");
+  cmd->callback([args, coverage_flags] {
+    Warnings warnings(args->json);
+    const bool default_levels = args->percents.empty() && args->budgets.empty();
+    if (default_levels) args->percents = {100, 25, 5, 1};
+    args->percents = without_repeats(args->percents, "--levels", warnings);
+    args->budgets = without_repeats(args->budgets, "--triangles", warnings);
     const std::vector<LevelRequest> requests = requests_from(args->percents, args->budgets, args->at_most);
     if (!(args->pixel_error > 0) || args->height < 1)
       throw InputError("", "--pixel-error must be > 0 and --height >= 1");
     std::string format = args->format;
     if (format.empty()) format = extension_of(args->output);
     std::transform(format.begin(), format.end(), format.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (format.empty())
+      throw InputError(args->output, std::string("has no extension to choose a format by: name the output ") +
+                                         kExportFormats + ", or give --format");
+    const std::vector<std::string> known = {"glb", "gltf", "ply", "obj", "off", "stl", "vtp"};
+    if (std::find(known.begin(), known.end(), format) == known.end())
+      throw InputError(args->output, "unknown extension '." + format + "': expected " + kExportFormats);
     const bool gltf = format == "glb" || format == "gltf";
+    for (const CLI::Option* flag : coverage_flags)
+      if (flag->count() && !gltf)
+        throw CLI::ValidationError(flag->get_name(), "applies to a glTF output only; a ." + format +
+                                                         " file stores no screen coverage, so it would be ignored");
     std::vector<std::string> outputs;
     if (gltf) {
       outputs.push_back(args->output);
@@ -119,7 +162,16 @@ void add_export_command(CLI::App& app) {
     const LevelChain chain = extract_chain(model, structure, requests, args->model, options);
     const double extract_seconds = seconds_since(start);
     for (const ChainLevel& l : chain.levels)
-      if (!l.shortfall.empty()) warn(l.shortfall);
+      if (!l.shortfall.empty()) warnings(l.shortfall);
+    // The chain is finest first; more percent never gives fewer triangles, so
+    // the percentages sorted down name its levels in turn.
+    std::vector<double> percents = args->percents;
+    std::sort(percents.begin(), percents.end(), std::greater<double>());
+    const std::string asker = default_levels ? "the default --levels" : "--levels";
+    for (std::size_t i = 0; i < percents.size() && i < chain.levels.size(); ++i)
+      if (const std::string shortfall = percent_shortfall(model, structure, asker, percents[i], chain.levels[i].cut);
+          !shortfall.empty())
+        warnings(shortfall);
 
     start = std::chrono::steady_clock::now();
     if (gltf) {
@@ -156,15 +208,18 @@ void add_export_command(CLI::App& app) {
     j["bytes"] = bytes;
     j["seconds"] = {{"load", load_seconds}, {"extract", extract_seconds}, {"write", write_seconds}};
     if (args->json) {
+      if (!warnings.kept().empty()) j["warnings"] = warnings.kept();
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
     for (const ChainLevel& l : chain.levels)
       say("%s: %zu triangles (%.1f %%), error %.3g, drawn from %.3g of the screen\n", l.name.c_str(),
           l.cut.triangles.size(), l.cut.percent, l.error, l.screen_coverage);
+    std::string written;
+    for (const std::string& out : outputs) written += (written.empty() ? "" : ", ") + out;
     say("%zu levels of the %s, %zu vertices, %.1f MB; load %.2f s, extract %.3f s, write %.2f s -> %s\n",
         chain.levels.size(), structure_name(structure), chain.vertices.positions.size(), double(bytes) / 1e6,
-        load_seconds, extract_seconds, write_seconds, gltf ? args->output.c_str() : fs::path(outputs[0]).parent_path().c_str());
+        load_seconds, extract_seconds, write_seconds, written.c_str());
   });
 }
 

@@ -2,6 +2,7 @@
 // either LOD structure (lod/lod_model.h): by percent, triangle budget,
 // object-space error, camera, or (octree) priority number.
 #include "cli/commands.h"
+#include "cli/level_warnings.h"
 #include "cli/outputs.h"
 #include "cli/terminal.h"
 #include "core/error.h"
@@ -21,6 +22,26 @@
 
 namespace scan2lod::cli {
 namespace {
+
+std::string triple(const Vec3f& v) {
+  char text[96];
+  std::snprintf(text, sizeof text, "%g,%g,%g", double(v.x()), double(v.y()), double(v.z()));
+  return text;
+}
+
+// A camera with no view direction, or an up that gives no sideways axis, has
+// no frame to project with: throws InputError naming --camera and the values.
+void require_camera_frame(const CameraView& c) {
+  const Vec3f view = c.target - c.eye;
+  if (!(view.norm() > 0))
+    throw InputError("", "--camera: the eye " + triple(c.eye) + " is the target " + triple(c.target) +
+                             "; the eye must stand away from what it looks at");
+  if (!(c.up.norm() > 0)) throw InputError("", "--camera: up " + triple(c.up) + " has no direction");
+  if (!(view.normalized().cross(c.up.normalized()).norm() > 1e-4f))
+    throw InputError("", "--camera: up " + triple(c.up) + " is parallel to the view direction " + triple(view) +
+                             " (from the eye " + triple(c.eye) + " to the target " + triple(c.target) +
+                             "); give an up across it");
+}
 
 // "EX,EY,EZ,TX,TY,TZ,UX,UY,UZ" -> camera; throws InputError naming --camera.
 CameraView parse_camera(const std::string& text) {
@@ -42,6 +63,7 @@ CameraView parse_camera(const std::string& text) {
   c.eye = Vec3f(v[0], v[1], v[2]);
   c.target = Vec3f(v[3], v[4], v[5]);
   c.up = Vec3f(v[6], v[7], v[8]);
+  require_camera_frame(c);
   return c;
 }
 
@@ -65,7 +87,8 @@ void add_extract_command(CLI::App& app) {
       ->check(CLI::IsMember({"clusters", "octree"}, CLI::ignore_case));
   CLI::Option* percent = cmd->add_option(
       "--percent", args->percent,
-      "0 to 100: octree, the first P % of the LOD array; clusters, P % of the full triangle count");
+      "0 to 100: octree, the first P % of the LOD array; clusters, P % of the full triangle count (a warning "
+      "when no level is within 10 % of it)");
   CLI::Option* triangles =
       cmd->add_option("--triangles", args->triangles,
                       "A level within 10 % of T triangles: the finest with at most T, or, where that falls more than "
@@ -76,16 +99,19 @@ void add_extract_command(CLI::App& app) {
                                        "Clusters: the cut at this object-space error (model units)");
   CLI::Option* camera = cmd->add_option("--camera", args->camera,
                                         "Clusters: the cut seen from EX,EY,EZ looking at TX,TY,TZ with up UX,UY,UZ");
-  cmd->add_option("--fov", args->fov, "With --camera: vertical field of view in degrees")->default_val(45);
-  cmd->add_option("--height", args->height, "With --camera: viewport height in pixels")->default_val(1080);
-  cmd->add_option("--pixel-error", args->pixel_error, "With --camera: largest error on screen, in pixels")
-      ->default_val(1);
+  // Given without --camera they would change nothing: a usage error, not a silent ignore.
+  const std::vector<CLI::Option*> camera_flags = {
+      cmd->add_option("--fov", args->fov, "With --camera only: vertical field of view in degrees, in (0, 180)")
+          ->default_val(45),
+      cmd->add_option("--height", args->height, "With --camera only: viewport height in pixels")->default_val(1080),
+      cmd->add_option("--pixel-error", args->pixel_error, "With --camera only: largest error on screen, in pixels")
+          ->default_val(1)};
   CLI::Option* priority =
       cmd->add_option("--priority", args->priority, "Octree: the level after N expansions (0: the root's mesh)");
   cmd->add_flag("--json", args->json,
                 "Print {\"structure\", \"triangles\", \"vertices\", \"clusters\", \"priority\", \"error\", "
-                "\"select_seconds\", \"extract_seconds\"} as JSON");
-  cmd->callback([args, percent, triangles, error, camera, priority] {
+                "\"select_seconds\", \"extract_seconds\"} as JSON, with \"warnings\" when there are any");
+  cmd->callback([args, percent, triangles, error, camera, priority, camera_flags] {
     const int given = int(percent->count() > 0) + int(triangles->count() > 0) + int(error->count() > 0) +
                       int(camera->count() > 0) + int(priority->count() > 0);
     if (given != 1)
@@ -99,8 +125,19 @@ void add_extract_command(CLI::App& app) {
       throw InputError("", "--priority must not be negative, got " + std::to_string(args->priority));
     if (error->count() && !(args->error >= 0 && std::isfinite(args->error)))
       throw InputError("", "--error must be a finite number >= 0, got " + error->as<std::string>());
-    if (!(args->fov > 0 && args->fov < 180) || args->height < 1 || !(args->pixel_error > 0))
-      throw InputError("", "--fov must be in (0, 180), --height >= 1 and --pixel-error > 0");
+    for (const CLI::Option* flag : camera_flags)
+      if (flag->count() && !camera->count()) {
+        const CLI::Option* asked = percent->count() ? percent : triangles->count() ? triangles
+                                                              : error->count()   ? error
+                                                                                 : priority;
+        throw CLI::ValidationError(flag->get_name(), "applies to --camera only; " + asked->get_name() +
+                                                         " takes no camera, so it would be ignored");
+      }
+    if (!(args->fov > 0 && args->fov < 180))
+      throw InputError("", "--fov must be in (0, 180) degrees, got " + camera_flags[0]->as<std::string>());
+    if (args->height < 1) throw InputError("", "--height must be >= 1, got " + camera_flags[1]->as<std::string>());
+    if (!(args->pixel_error > 0))
+      throw InputError("", "--pixel-error must be > 0, got " + camera_flags[2]->as<std::string>());
     LevelRequest request;
     if (percent->count()) request = LevelRequest::at_percent(args->percent);
     else if (triangles->count())
@@ -122,7 +159,13 @@ void add_extract_command(CLI::App& app) {
         model, args->structure.empty() && priority->count() ? std::string("octree") : args->structure, args->model);
     LevelExtractor extractor(model, structure);
     const LevelCut& cut = extract_level_to_deliver(&extractor, request, args->model);
-    if (const std::string shortfall = budget_shortfall(extractor, request, cut); !shortfall.empty()) warn(shortfall);
+    Warnings warnings(args->json);
+    if (const std::string shortfall = budget_shortfall(extractor, request, cut); !shortfall.empty())
+      warnings(shortfall);
+    if (percent->count())
+      if (const std::string shortfall = percent_shortfall(model, structure, "--percent", args->percent, cut);
+          !shortfall.empty())
+        warnings(shortfall);
     const auto start = std::chrono::steady_clock::now();
     const TriangleMesh mesh = compact_level(model, cut.triangles);
     const double compact_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -144,6 +187,7 @@ void add_extract_command(CLI::App& app) {
       j["percent"] = cut.percent;
       j["select_seconds"] = cut.select_seconds;
       j["extract_seconds"] = cut.extract_seconds + compact_seconds;
+      if (!warnings.kept().empty()) j["warnings"] = warnings.kept();
       std::printf("%s\n", j.dump(2).c_str());
     } else if (structure == LodStructure::kClusters) {
       say("clusters: %zu clusters, %zu triangles (%.1f %%), %zu vertices, error %.3g, selected in %.3f ms, "

@@ -1,6 +1,7 @@
 #include "cli/commands.h"
 #include "cli/exit_codes.h"
 #include "cli/terminal.h"
+#include "cli/usage.h"
 #include "core/error.h"
 #include "lod/model_file.h"
 
@@ -15,6 +16,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.fallthrough();
   app.footer(exit_code_help());
+  app.failure_message(usage_failure_message);
   app.set_version_flag("--version", std::string("scan2lod ") + SCAN2LOD_VERSION + " (model format " +
                                         std::to_string(scan2lod::kModelFormatMajor) + "." +
                                         std::to_string(scan2lod::kModelFormatMinor) + ")");
@@ -35,6 +37,11 @@ int main(int argc, char** argv) {
   add_render_command(app);
   add_plot_command(app);
   add_view_command(app);
+  // CLI11 would take a mistyped command for a missing one.
+  if (const std::string unknown = unknown_command_message(app, argc, argv); !unknown.empty()) {
+    std::fprintf(stderr, "scan2lod: error: %s\n", unknown.c_str());
+    return kExitUsage;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

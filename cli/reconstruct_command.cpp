@@ -23,9 +23,9 @@ void add_reconstruct_command(CLI::App& app) {
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
-      "reconstruct", "Range scans, organized clouds or a mesh -> marching-cubes mesh");
+      "reconstruct", "Range scans, point clouds or a mesh -> marching-cubes mesh");
   cmd->add_option("inputs", args->inputs,
-                  "A .conf, range-grid PLYs, organized PCDs, or a mesh (.ply .obj .off .stl .glb .gltf)")
+                  kInputsHelp)
       ->required();
   cmd->add_option("-o,--output", args->output, "Output mesh (.ply .obj .stl .off .vtp .glb .gltf)")->required();
   cmd->add_flag("--no-quantize", args->no_quantize, "glTF: 32-bit float positions and normals");

@@ -2,6 +2,7 @@
 
 #include "cli/byte_size.h"
 #include "cli/terminal.h"
+#include "cli/usage.h"
 #include "core/error.h"
 
 #include <cstdio>
@@ -11,6 +12,7 @@ namespace scan2lod::cli {
 
 const ReconstructOptions& ReconstructFlags::resolve() {
   options.distance.method = parse_distance_method(method);
+  options.threads = usable_threads(options.threads);
   acquisition.threads = options.threads;
   return options;
 }
@@ -65,7 +67,7 @@ void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {
   cmd->add_option("--brick-cubes", flags->brick_cubes,
                   "Cubes per brick side, a power of two of 16 or more; with it the work always runs in bricks "
                   "(default: from --memory)");
-  cmd->add_option("-j,--threads", o.threads, "Threads (0: all cores)")->capture_default_str();
+  add_threads_option(cmd, &o.threads);
 }
 
 void require_surface(const std::vector<std::string>& inputs, const Reconstruction& r, int resolution) {

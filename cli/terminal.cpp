@@ -33,6 +33,11 @@ void warn(const std::string& text) {
   if (!g_quiet) std::fprintf(stderr, "scan2lod: warning: %s\n", text.c_str());
 }
 
+void Warnings::operator()(const std::string& text) {
+  if (into_json_) kept_.push_back(text);
+  else warn(text);
+}
+
 void install_terminal_progress() {
   if (!isatty(fileno(stderr))) return;
   set_progress_sink([](const std::string& label, double fraction, bool finished) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace scan2lod::cli {
 
@@ -15,6 +16,20 @@ void say(const char* format, ...) __attribute__((format(printf, 1, 2)));
 
 // "scan2lod: warning: TEXT" on stderr unless --quiet.
 void warn(const std::string& text);
+
+// The warnings of a command that answers --json: on stderr as they come (as
+// warn()), or with --json kept for the object's "warnings", so that its output
+// stays one parseable object even with stderr merged into it.
+class Warnings {
+ public:
+  explicit Warnings(bool into_json) : into_json_(into_json) {}
+  void operator()(const std::string& text);
+  const std::vector<std::string>& kept() const { return kept_; }
+
+ private:
+  bool into_json_;
+  std::vector<std::string> kept_;
+};
 
 // Draws the library's progress (core/progress.h) as a bar on stderr, only when
 // stderr is a terminal and --quiet was not given.

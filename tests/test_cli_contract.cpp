@@ -16,9 +16,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::CliRun;
+using testing::exit_code;
 using testing::run_cli;
 
-int exit_code(const CliRun& r) { return WIFEXITED(r.status) ? WEXITSTATUS(r.status) : -1; }
 
 fs::path scratch() { return testing::scratch_folder("cli_contract"); }
 

@@ -33,6 +33,7 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using testing::CliRun;
+using testing::exit_code;
 
 std::string bytes_of(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -262,18 +263,9 @@ std::string why_not_as_nobody() {
 }
 
 CliRun run_as_nobody(const std::string& args) {
-  const std::string command = std::string("runuser -u nobody -- ") + SCAN2LOD_CLI + " " + args + " 2>&1";
-  CliRun r{-1, ""};
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return r;
-  char buffer[4096];
-  std::size_t n;
-  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
-  r.status = pclose(pipe);
-  return r;
+  return testing::run_shell(std::string("runuser -u nobody -- ") + SCAN2LOD_CLI + " " + args + " 2>&1");
 }
 
-int exit_code(const CliRun& r) { return WIFEXITED(r.status) ? WEXITSTATUS(r.status) : -1; }
 
 struct stat status_of(const fs::path& p) {
   struct stat st {};

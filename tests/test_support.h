@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <sys/wait.h>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -20,9 +21,8 @@ struct CliRun {
   std::string output;  // stdout, and stderr unless it was dropped
 };
 
-// Runs `scan2lod ARGS` through the shell.
-inline CliRun run_cli(const std::string& args, bool merge_stderr = true) {
-  const std::string command = std::string(SCAN2LOD_CLI) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
+// Runs a shell command line, collecting what it prints to stdout.
+inline CliRun run_shell(const std::string& command) {
   CliRun r{-1, ""};
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return r;
@@ -32,6 +32,14 @@ inline CliRun run_cli(const std::string& args, bool merge_stderr = true) {
   r.status = pclose(pipe);
   return r;
 }
+
+// Runs `scan2lod ARGS` through the shell.
+inline CliRun run_cli(const std::string& args, bool merge_stderr = true) {
+  return run_shell(std::string(SCAN2LOD_CLI) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null"));
+}
+
+// The exit code of a run, or -1 when it did not exit (a signal).
+inline int exit_code(const CliRun& r) { return WIFEXITED(r.status) ? WEXITSTATUS(r.status) : -1; }
 
 // This process's scratch folder (created on first use, removed at exit).
 inline std::filesystem::path scratch_folder() {
