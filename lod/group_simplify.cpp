@@ -43,45 +43,6 @@ struct Quadric {
     }
     return e;
   }
-  // The point where the quadric is least (A x = -b), into `out`; false
-  // where A is near singular (a flat or straight neighbourhood, where any
-  // point along it is as good and the solve would wander). LDL^T by hand:
-  // Eigen's with its condition estimate took half the hierarchy's build.
-  bool minimum(int dim, double* out) const {
-    double m[kMaxDim][kMaxDim], y[kMaxDim];
-    int k = 0;
-    double largest = 0;
-    for (int i = 0; i < dim; ++i) {
-      for (int j = i; j < dim; ++j) m[j][i] = a[std::size_t(k++)];
-      k += kMaxDim - dim;
-      largest = std::max(largest, std::abs(m[i][i]));
-    }
-    if (!(largest > 0)) return false;
-    for (int j = 0; j < dim; ++j) {  // lower triangle: L below, D on the diagonal
-      double d = m[j][j];
-      for (int k2 = 0; k2 < j; ++k2) d -= m[j][k2] * m[j][k2] * m[k2][k2];
-      if (!(d > kSingular * largest)) return false;
-      m[j][j] = d;
-      for (int i = j + 1; i < dim; ++i) {
-        double v = m[i][j];
-        for (int k2 = 0; k2 < j; ++k2) v -= m[i][k2] * m[j][k2] * m[k2][k2];
-        m[i][j] = v / d;
-      }
-    }
-    for (int i = 0; i < dim; ++i) {
-      double v = -b[std::size_t(i)];
-      for (int k2 = 0; k2 < i; ++k2) v -= m[i][k2] * y[k2];
-      y[i] = v;
-    }
-    for (int i = 0; i < dim; ++i) y[i] /= m[i][i];
-    for (int i = dim - 1; i >= 0; --i) {
-      double v = y[i];
-      for (int k2 = i + 1; k2 < dim; ++k2) v -= m[k2][i] * out[k2];
-      if (!std::isfinite(v)) return false;
-      out[i] = v;
-    }
-    return true;
-  }
   // Adds w * (I - sum e e^T) for the orthonormal `basis` of a plane through q.
   void add_plane(const double* q, const double (*basis)[kMaxDim], int basis_size, int dim, double w) {
     double qe[2] = {0, 0};
@@ -105,6 +66,59 @@ struct Quadric {
     c += w * qq;
   }
 };
+
+// Where p + q is least (A x = -b), into `out`, with the value there; false
+// where A is near singular (a flat or straight neighbourhood, where any
+// point along it is as good and the solve would wander). LDL^T by hand and
+// of a fixed size: Eigen's with its condition estimate took half the
+// hierarchy's build, and a loop over the dimension a quarter.
+template <int D>
+bool sum_minimum(const Quadric& p, const Quadric& q, double* out, double* value) {
+  double m[D][D], y[D];
+  double largest = 0;
+  for (int i = 0; i < D; ++i) {
+    const int row = i * kMaxDim - i * (i - 1) / 2;  // the upper triangle's row i starts here
+    for (int j = i; j < D; ++j) m[j][i] = p.a[std::size_t(row + j - i)] + q.a[std::size_t(row + j - i)];
+    largest = std::max(largest, std::abs(m[i][i]));
+  }
+  if (!(largest > 0)) return false;
+  for (int j = 0; j < D; ++j) {  // lower triangle: L below, D on the diagonal
+    double d = m[j][j];
+    for (int k = 0; k < j; ++k) d -= m[j][k] * m[j][k] * m[k][k];
+    if (!(d > kSingular * largest)) return false;
+    m[j][j] = d;
+    for (int i = j + 1; i < D; ++i) {
+      double v = m[i][j];
+      for (int k = 0; k < j; ++k) v -= m[i][k] * m[j][k] * m[k][k];
+      m[i][j] = v / d;
+    }
+  }
+  for (int i = 0; i < D; ++i) {
+    double v = -(p.b[std::size_t(i)] + q.b[std::size_t(i)]);
+    for (int k = 0; k < i; ++k) v -= m[i][k] * y[k];
+    y[i] = v;
+  }
+  for (int i = 0; i < D; ++i) y[i] /= m[i][i];
+  double at = p.c + q.c;  // x^T A x + 2 b^T x + c where A x = -b
+  for (int i = D - 1; i >= 0; --i) {
+    double v = y[i];
+    for (int k = i + 1; k < D; ++k) v -= m[k][i] * out[k];
+    if (!std::isfinite(v)) return false;
+    out[i] = v;
+  }
+  for (int i = 0; i < D; ++i) at += (p.b[std::size_t(i)] + q.b[std::size_t(i)]) * out[i];
+  *value = at;
+  return true;
+}
+
+bool sum_minimum(int dim, const Quadric& p, const Quadric& q, double* out, double* value) {
+  switch (dim) {
+    case 3: return sum_minimum<3>(p, q, out, value);
+    case 6: return sum_minimum<6>(p, q, out, value);
+    case 9: return sum_minimum<9>(p, q, out, value);
+    default: return false;  // no other dimension is built
+  }
+}
 
 struct GroupQuadrics {
   int dim = 3;
@@ -398,24 +412,22 @@ Meeting meeting(const GroupTopology& g, const GroupQuadrics& q, int from, int to
     m.cost = float(std::max(0.0, q.full[f].evaluate(m.x.data(), q.dim) + q.full[t].evaluate(m.x.data(), q.dim)));
     return m;
   }
-  Quadric sum = q.full[f];
-  sum.add(q.full[t]);
   const double* a = q.x[f].data();
   const double* b = q.x[t].data();
-  double length2 = 0, off2 = 0;
+  double length2 = 0, off2 = 0, at = 0;
   for (int i = 0; i < 3; ++i) length2 += (a[i] - b[i]) * (a[i] - b[i]);
-  if (sum.minimum(q.dim, m.x.data())) {
+  if (sum_minimum(q.dim, q.full[f], q.full[t], m.x.data(), &at)) {
     for (int i = 0; i < 3; ++i) off2 += (m.x[std::size_t(i)] - 0.5 * (a[i] + b[i])) * (m.x[std::size_t(i)] - 0.5 * (a[i] + b[i]));
     if (off2 <= length2) {
-      double at = sum.c;  // x^T A x + 2 b^T x + c where A x = -b
-      for (int i = 0; i < q.dim; ++i) at += sum.b[std::size_t(i)] * m.x[std::size_t(i)];
       m.cost = float(std::max(0.0, at));
       return m;
     }
   }
+  m.x = {};
   std::array<double, kMaxDim> middle{};
   for (int i = 0; i < q.dim; ++i) middle[std::size_t(i)] = 0.5 * (a[i] + b[i]);
-  const double at_to = sum.evaluate(b, q.dim), at_from = sum.evaluate(a, q.dim), at_middle = sum.evaluate(middle.data(), q.dim);
+  auto cost_at = [&](const double* x) { return q.full[f].evaluate(x, q.dim) + q.full[t].evaluate(x, q.dim); };
+  const double at_to = cost_at(b), at_from = cost_at(a), at_middle = cost_at(middle.data());
   m.x = q.x[t];
   double best = at_to;
   if (at_middle < best) best = at_middle, m.x = middle;
