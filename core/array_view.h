@@ -41,7 +41,6 @@ class JoinedView {
   std::size_t size() const { return base_.size() + (tail_ ? tail_->size() : 0); }
   bool empty() const { return size() == 0; }
   const T& operator[](std::size_t i) const { return i < base_.size() ? base_[i] : (*tail_)[i - base_.size()]; }
-  ArrayView<T> base() const { return base_; }
 
  private:
   ArrayView<T> base_;
