@@ -55,7 +55,7 @@ void add_reconstruct_command(CLI::App& app) {
     MeshWriteOptions write;
     write.quantize = !args->no_quantize;
     write.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
-    write_mesh(args->output, r.mesh, write);
+    const std::size_t vertices_written = write_mesh(args->output, r.mesh, write);
     args->flags.finished(report_bricks, build);
     const double write_seconds = std::chrono::duration<double>(clock::now() - write_start).count();
     const double seconds = std::chrono::duration<double>(clock::now() - start).count();
@@ -63,7 +63,7 @@ void add_reconstruct_command(CLI::App& app) {
       const ReconstructStats& s = r.stats;
       const nlohmann::ordered_json j = {
           {"points", s.points}, {"cubes_touched", s.cubes_touched}, {"cubes_emitting", s.cubes_emitting},
-          {"triangles", r.mesh.triangles.size()}, {"vertices", r.mesh.positions.size()}, {"output", args->output},
+          {"triangles", r.mesh.triangles.size()}, {"vertices", vertices_written}, {"output", args->output},
           {"seconds", {{"total", seconds}, {"read", read_seconds}, {"kd_tree", s.seconds_index},
                        {"signed_distances", s.seconds_distances}, {"marching_cubes", s.seconds_emit},
                        {"pieces_and_holes", s.seconds_cleanup}, {"attributes", s.seconds_attributes},
@@ -83,7 +83,7 @@ void add_reconstruct_command(CLI::App& app) {
     }
     say("%zu points, %zu cubes touched, %zu emitting, %zu triangles, %zu vertices, %.2f s -> %s\n",
                 r.stats.points, r.stats.cubes_touched, r.stats.cubes_emitting,
-                r.mesh.triangles.size(), r.mesh.positions.size(), seconds, args->output.c_str());
+                r.mesh.triangles.size(), vertices_written, seconds, args->output.c_str());
   });
 }
 

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/used_vertices.h"
 
 // Debian's libtinygltf is built with nlohmann_json; no images are written,
 // so stb is not needed.
@@ -15,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 namespace scan2lod {
 namespace {
@@ -273,7 +275,14 @@ void write_gltf_chain(const std::string& path, const TriangleMesh& vertices, con
   if (!is_gltf_path(path)) throw InputError(path, "expected a .glb or .gltf file name");
   check_chain(path, vertices, levels);
   const bool binary = lower_extension(path) == ".glb";
-  const tinygltf::Model model = build_model(vertices, levels, options);
+  // Vertices no level uses are left out (io/used_vertices.h).
+  std::vector<const std::vector<Triangle>*> lists;
+  for (const GltfLevel& level : levels) lists.push_back(level.triangles);
+  std::optional<UsedVertices> used = drop_unused_vertices(vertices, lists);
+  std::vector<GltfLevel> renumbered = levels;
+  if (used)
+    for (std::size_t l = 0; l < levels.size(); ++l) renumbered[l].triangles = &used->lists[l];
+  const tinygltf::Model model = build_model(used ? used->vertices : vertices, renumbered, options);
   write_atomically(path, [&](const std::string& tmp) {
     // Straight into the file: a string in between would copy the buffer
     // twice more and fault in its pages.

@@ -36,14 +36,16 @@ struct GltfLevel {
   double screen_coverage = 0;
 };
 
-// Writes `mesh` (its triangles as the only level) to `path`, .glb or .gltf.
+// Writes `mesh` (its triangles as the only level) to `path`, .glb or .gltf,
+// with only the vertices they use.
 // Throws InputError for another extension, an inconsistent mesh or a failed
 // write; output goes through a temporary file renamed into place.
 void write_gltf(const std::string& path, const TriangleMesh& mesh, const GltfOptions& options = {});
 
 // Writes `levels` over the vertex arrays of `vertices` (its triangles are not
 // read) as one MSFT_lod chain, finest level first. Screen coverages must not
-// increase along the chain. One level writes a plain mesh.
+// increase along the chain. One level writes a plain mesh. Vertices that no
+// level uses are left out (io/used_vertices.h).
 void write_gltf_chain(const std::string& path, const TriangleMesh& vertices, const std::vector<GltfLevel>& levels,
                       const GltfOptions& options = {});
 

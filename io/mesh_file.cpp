@@ -5,6 +5,7 @@
 #include "io/gltf_file.h"
 #include "io/gltf_read.h"
 #include "io/obj_writer.h"
+#include "io/used_vertices.h"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/IO/exporter/BaseExporter.hh>
@@ -46,6 +47,7 @@
 #include <fstream>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string_view>
 #include <system_error>
@@ -1089,26 +1091,30 @@ void check_mesh_output(const std::string& path) {
   check_output_path(path);
 }
 
-void write_mesh(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options) {
+std::size_t write_mesh(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options) {
   check_mesh_output(path);
   const std::string ext = lower_extension(path);
   check_consistent(path, mesh);
   if (mesh.triangles.empty()) throw InputError(path, "cannot write: the mesh has no triangles");
+  std::optional<UsedVertices> used = drop_unused_vertices(mesh, {&mesh.triangles});
+  if (used) used->vertices.triangles = std::move(used->lists[0]);
+  const TriangleMesh& out = used ? used->vertices : mesh;
   if (is_gltf_path(path)) {
     GltfOptions gltf;
     gltf.quantize = options.quantize;
     gltf.generator = options.generator;
-    write_gltf(path, mesh, gltf);
-    return;
+    write_gltf(path, out, gltf);
+    return out.positions.size();
   }
   write_atomically(path, [&](const std::string& tmp) {
     if (ext == ".vtp")
-      write_vtp(tmp, path, mesh);
+      write_vtp(tmp, path, out);
     else if (ext == ".obj")
-      write_obj(tmp, path, mesh);
+      write_obj(tmp, path, out);
     else
-      write_with_openmesh(tmp, path, ext, mesh);
+      write_with_openmesh(tmp, path, ext, out);
   });
+  return out.positions.size();
 }
 
 }  // namespace scan2lod

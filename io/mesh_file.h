@@ -11,6 +11,7 @@
 
 #include "core/types.h"
 
+#include <cstddef>
 #include <string>
 
 namespace scan2lod {
@@ -47,6 +48,8 @@ TriangleMesh read_mesh(const std::string& path);
 //         "Normals" and an unsigned-char "RGB" array when present
 //   .glb  glTF 2.0 binary, .gltf glTF 2.0 JSON with the buffer embedded:
 //         normals and colours when present; quantized unless options say not
+// Only the vertices some triangle uses are written, in their order in `mesh`
+// (io/used_vertices.h); returns how many that is.
 // `mesh` must be consistent: every triangle index < positions.size(), and
 // normals/colors empty or one per vertex. Output goes through write_atomically,
 // so a failure or a signal leaves nothing behind.
@@ -56,7 +59,7 @@ struct MeshWriteOptions {
   bool quantize = true;   // glTF: KHR_mesh_quantization
   std::string generator;  // glTF: asset.generator
 };
-void write_mesh(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options = {});
+std::size_t write_mesh(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options = {});
 
 // Throws InputError unless write_mesh could write `path`: a known extension in
 // an existing folder, and not a folder itself. Commands call it before long

@@ -122,6 +122,7 @@ bool sum_minimum(int dim, const Quadric& p, const Quadric& q, double* out, doubl
 
 struct GroupQuadrics {
   int dim = 3;
+  double scale = 1;                            // x's positions over the stored ones
   std::vector<std::array<double, kMaxDim>> x;  // each vertex's point in R^dim
   std::vector<Quadric> full;                   // position + attributes
 };
@@ -202,7 +203,7 @@ struct Candidate {
 // over or collapse; and no new edge may join two locked vertices, which a
 // neighbouring group might join too.
 bool collapse_allowed(GroupTopology* g, int from, int to, const Eigen::Vector3d& target,
-                      const std::vector<std::array<double, kMaxDim>>& x) {
+                      const std::vector<std::array<double, kMaxDim>>& x, double scale) {
   if (g->locked[std::size_t(from)]) return false;
   int shared = 0;
   for (int t : g->incident[std::size_t(from)])
@@ -260,9 +261,10 @@ bool collapse_allowed(GroupTopology* g, int from, int to, const Eigen::Vector3d&
     }
     const Eigen::Vector3d before = (p[1] - p[0]).cross(p[2] - p[0]), after = (q[1] - q[0]).cross(q[2] - q[0]);
     const double a = after.norm();
-    // In line as the float positions have it: three vertices on one edge of
-    // a flat face (a box's) kept a sliver the double cross product missed.
-    if (!(a > 0) || in_line(q[0].cast<float>(), q[1].cast<float>(), q[2].cast<float>()) ||
+    // In line as the stored float positions have it: a vertex placed a hair
+    // off a box's flat face rounds back onto it, in line with two others.
+    const auto stored = [&](const Eigen::Vector3d& v) { return Vec3f((v / scale).cast<float>()); };
+    if (!(a > 0) || in_line(stored(q[0]), stored(q[1]), stored(q[2])) ||
         after.dot(before) < 0.2 * before.norm() * a)
       return false;
   }
@@ -343,6 +345,7 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
   GroupQuadrics& q = *quadrics;
   const std::size_t nv = global.size();
   q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
+  q.scale = in.scale;
   q.x.resize(nv);
   q.full.assign(nv, Quadric());
   for (std::size_t v = 0; v < nv; ++v) {
@@ -508,7 +511,7 @@ std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopol
     }
     const Meeting m = meetings[std::size_t(c.meeting)];
     if (m.swap) std::swap(c.from, c.to);
-    if (!collapse_allowed(&g, c.from, c.to, Eigen::Vector3d(m.x[0], m.x[1], m.x[2]), q.x)) continue;
+    if (!collapse_allowed(&g, c.from, c.to, Eigen::Vector3d(m.x[0], m.x[1], m.x[2]), q.x, q.scale)) continue;
     // Apply: triangles on the edge die, the rest of from's move to `to`,
     // which moves to the meeting point.
     for (int t : g.incident[std::size_t(c.from)]) {

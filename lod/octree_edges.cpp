@@ -39,7 +39,7 @@ std::int32_t EdgeResolver::interpolated_vertex(std::uint64_t edge) {
   const int axis = int(edge & 3);
   const std::uint64_t upper = lower + kAxisStep[axis];
   const float da = signs_.exact(lower), db = signs_.exact(upper);
-  const float t = std::clamp(std::fabs(da) / (std::fabs(da) + std::fabs(db)), 1e-4f, 1.f - 1e-4f);
+  const float t = crossing_ratio(da, db);
   int x, y, z;
   unpack_key(lower, &x, &y, &z);
   Vec3f p = tree_.grid.corner_position(x, y, z);

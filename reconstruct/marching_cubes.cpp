@@ -462,7 +462,8 @@ class SurfaceBuilder {
 
   // Fills the leaves' edge_ratios: each vertex at the ratio of the corners'
   // |distance| along its edge (Lee 2007, §4.2), kept off the corners so that no
-  // triangle collapses. Leaves are independent: both cores.
+  // triangle degenerates into a needle (crossing_ratio). Leaves are
+  // independent: both cores.
   void place_ratios(std::size_t first, std::size_t end) {
     const auto& table = cube_cases();
 #pragma omp parallel for schedule(static) num_threads(end - first > 4096 ? threads_ : 1)
@@ -475,7 +476,7 @@ class SurfaceBuilder {
         if (!(cc.edge_mask >> e & 1)) continue;
         const float da = corner_distances_[corners[edge_corner(e, 0)]];
         const float db = corner_distances_[corners[edge_corner(e, 1)]];
-        er[e] = std::clamp(std::fabs(da) / (std::fabs(da) + std::fabs(db)), 1e-4f, 1.f - 1e-4f);
+        er[e] = crossing_ratio(da, db);
       }
     }
   }

@@ -334,7 +334,7 @@ std::size_t WeldedSurface::grow_into_small_holes(std::size_t max_edges, const Co
     for (int e = 0; e < 12; ++e) {
       if (!(cc.edge_mask >> e & 1)) continue;
       const float da = d[edge_corner(e, 0)], db = d[edge_corner(e, 1)];
-      const float ratio = std::clamp(std::fabs(da) / (std::fabs(da) + std::fabs(db)), 1e-4f, 1.f - 1e-4f);
+      const float ratio = crossing_ratio(da, db);
       const std::uint64_t lower = corner_key_of(cube, edge_corner(e, 0));
       int x, y, z;
       unpack_key(lower, &x, &y, &z);

@@ -160,8 +160,16 @@ TEST(Reconstruct, VerticesSitAtTheDistanceRatioNotTheMidpoint) {
   ASSERT_GT(r.mesh.triangles.size(), 1000u);
   const double h = r.leaves.grid.cube_size;
   double worst = 0;
-  for (const Vec3f& p : r.mesh.positions) worst = std::max(worst, double(std::abs(p.z() - 0.3f * p.x())));
-  EXPECT_LT(worst, 2e-4 * h);  // ratios are kept 1e-4 off the corners
+  std::size_t on_plane = 0;
+  for (const Vec3f& p : r.mesh.positions) {
+    const double off = std::abs(p.z() - 0.3f * p.x());
+    worst = std::max(worst, off);
+    on_plane += off < 1e-4 * h;
+  }
+  // Crossings are kept kCrossingMargin of an edge off the corners: only the
+  // vertices near a corner on the plane move, and by at most that.
+  EXPECT_LE(worst, 1.001 * kCrossingMargin * h);
+  EXPECT_GT(double(on_plane), 0.75 * r.mesh.positions.size());  // 83 % here
   // Outward everywhere; exact but for slivers at the patch's rim.
   std::size_t exact = 0;
   for (const Vec3f& v : r.mesh.normals) {
