@@ -9,6 +9,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <optional>
 #include <array>
 #include <queue>
 #include <cmath>
@@ -59,11 +60,24 @@ void face_outward(OrientedPoints* points, const std::vector<std::int32_t>& piece
     if (flip[std::size_t(piece[i])]) points->normals[i] = -points->normals[i];
 }
 
+// Turns each piece's normals around when, summed, they point away from a
+// sensor in `direction`: every surface a far sensor sampled faced it, but a
+// single normal near the horizontal can go either way, so the piece decides.
+void face_direction(OrientedPoints* points, const std::vector<std::int32_t>& piece, std::int32_t pieces,
+                    const Vec3f& direction) {
+  std::vector<double> toward(static_cast<std::size_t>(pieces), 0.0);
+  for (std::size_t i = 0; i < points->size(); ++i) toward[std::size_t(piece[i])] += points->normals[i].dot(direction);
+  for (std::size_t i = 0; i < points->size(); ++i)
+    if (toward[std::size_t(piece[i])] < 0.0) points->normals[i] = -points->normals[i];
+}
+
 // Orients normals consistently by propagating along a minimum spanning tree
 // of the k-nearest-neighbour graph, edges weighted 1 - |n_i . n_j| so that the
 // orientation crosses where neighbouring planes agree (Hoppe et al. 1992).
-// Each connected piece of the graph is then turned outward on its own.
-void orient_consistently(OrientedPoints* points, int k, int threads) {
+// Each connected piece of the graph is then turned outward on its own, or
+// toward a far sensor's `direction` when there is one (an airborne scan's
+// ground has no outside for the hull to tell).
+void orient_consistently(OrientedPoints* points, int k, int threads, const std::optional<Vec3f>& direction) {
   const std::size_t n = points->size();
   k = std::min<int>(k + 1, int(n));
   std::vector<std::int32_t> nn(n * std::size_t(k));
@@ -118,11 +132,13 @@ void orient_consistently(OrientedPoints* points, int k, int threads) {
     }
     ++pieces;
   }
-  face_outward(points, piece, pieces);
+  if (direction) face_direction(points, piece, pieces, *direction);
+  else face_outward(points, piece, pieces);
 }
 
 // Normals from the positions alone: Open3D's local plane fits, then turned
-// toward the sensor when the file names one, else oriented consistently.
+// toward the sensor when the file names one, else oriented consistently and
+// turned outward, or toward a far sensor's direction (LAS: +Z).
 OrientedPoints estimated_normals(const PointCloud& cloud, const CloudNormalOptions& options) {
   open3d::geometry::PointCloud o3d;
   std::vector<std::size_t> kept;
@@ -147,7 +163,8 @@ OrientedPoints estimated_normals(const PointCloud& cloud, const CloudNormalOptio
     if (colored) points.colors.push_back(cloud.colors[kept[j]]);
   }
   progress.advance();
-  if (!cloud.viewpoint && points.size() > 1) orient_consistently(&points, options.orient_neighbours, options.threads);
+  if (!cloud.viewpoint && points.size() > 1)
+    orient_consistently(&points, options.orient_neighbours, options.threads, cloud.sensor_direction);
   progress.finish();
   return points;
 }

@@ -2,7 +2,8 @@
 // normals estimated from the neighbours and oriented either toward the sensor
 // (when the file names one) or consistently over a neighbour graph (Hoppe et
 // al., "Surface reconstruction from unorganized points", 1992), then turned
-// outward as a whole.
+// outward as a whole, or, for a sensor far away in a known direction (LAS:
+// airborne, +Z), toward it.
 #pragma once
 
 #include "acquisition/point_cloud_files.h"

@@ -1,8 +1,10 @@
 #include "acquisition/load_inputs.h"
 
 #include "acquisition/cloud_normals.h"
+#include "acquisition/las_file.h"
 #include "acquisition/mesh_points.h"
 #include "acquisition/organized_pcd.h"
+#include "acquisition/ply_header.h"
 #include "acquisition/point_cloud_files.h"
 #include "acquisition/range_grid_ply.h"
 #include "core/error.h"
@@ -58,14 +60,16 @@ Kind classify(const std::string& path) {
     const PlyKind kind = ply_kind(path);
     return kind == PlyKind::range_grid ? Kind::range_grid : kind == PlyKind::mesh ? Kind::mesh : Kind::cloud;
   }
-  if (ext == ".xyz" || ext == ".pts" || ext == ".xyzn" || ext == ".xyzrgb") return Kind::cloud;
+  if (ext == ".xyz" || ext == ".pts" || ext == ".xyzn" || ext == ".xyzrgb" || ext == ".las") return Kind::cloud;
+  if (ext == ".laz") throw InputError(path, laz_refusal(path));
   if (ext == ".obj" || ext == ".off" || ext == ".stl" || ext == ".vtp" || ext == ".glb" || ext == ".gltf") return Kind::mesh;
   throw InputError(path, "unknown input type '" + ext +
-                             "': expected .conf, .ply, .pcd, .xyz, .pts, .obj, .off, .stl, .vtp, .glb or .gltf");
+                             "': expected .conf, .ply, .pcd, .xyz, .pts, .las, .obj, .off, .stl, .vtp, .glb or .gltf");
 }
 
-PointCloud read_point_cloud(const std::string& path) {
+PointCloud read_point_cloud(const std::string& path, const Vec3d& origin) {
   const std::string ext = lower_extension(path);
+  if (ext == ".las") return read_las(path, origin);
   if (ext == ".pcd") return read_unorganized_pcd(path);
   if (ext == ".ply") return read_point_cloud_ply(path);
   return read_point_cloud_text(path);
@@ -117,9 +121,19 @@ struct Job {
   Kind kind;
   std::string file;
   ScanPose pose;
+  Vec3d origin = Vec3d::Zero();  // the inputs' common local origin (AcquisitionReport::origin)
 };
 
-// The files to read, in order, with their poses; checks registration.
+// The local origin all inputs are shifted to: that of the first LAS input
+// (acquisition/las_file.h), read from its header; zero without LAS inputs.
+// One origin for all, so that tiles and other inputs keep their places.
+Vec3d common_origin(const std::vector<Job>& jobs) {
+  for (const Job& job : jobs)
+    if (lower_extension(job.file) == ".las") return las_local_origin(read_las_header(job.file));
+  return Vec3d::Zero();
+}
+
+// The files to read, in order, with their poses and the common origin; checks registration.
 std::vector<Job> plan_jobs(const std::vector<std::string>& inputs, const AcquisitionOptions& options) {
   if (inputs.empty()) throw InputError("", "no input files given");
   std::vector<Job> jobs;
@@ -136,32 +150,50 @@ std::vector<Job> plan_jobs(const std::vector<std::string>& inputs, const Acquisi
     }
   }
   if (!options.unregistered) require_registration(loose_scans, with_conf);
+  const Vec3d origin = common_origin(jobs);
+  for (Job& job : jobs) job.origin = origin;
   return jobs;
 }
 
-// One file's oriented points; `estimated`: its normals were estimated.
+// Positions relative to `from` made relative to `to` (both points of the
+// inputs' frame), in double: a file in the inputs' own frame has from = 0.
+void move_origin(std::vector<Vec3f>* positions, const Vec3d& from, const Vec3d& to) {
+  if (from == to) return;
+  const Vec3d shift = from - to;
+  for (Vec3f& p : *positions) p = (p.cast<double>() + shift).cast<float>();
+}
+
+// One file's oriented points about the common origin; `estimated`: its
+// normals were estimated.
 OrientedPoints read_job(const Job& job, const AcquisitionOptions& options, int threads, bool* estimated,
                         std::vector<std::string>* warnings) {
   *estimated = false;
+  OrientedPoints points;
   if (job.kind == Kind::range_grid) {
     const RangeImage image = read_range_grid_ply(job.file);
     *warnings = image.warnings;
-    return range_image_to_points(image, job.pose, options.lattice);
-  }
-  if (job.kind == Kind::pcd) {
+    points = range_image_to_points(image, job.pose, options.lattice);
+  } else if (job.kind == Kind::pcd) {
     ScanPose pose;
     RangeImage image = read_organized_pcd(job.file, &pose);
-    return range_image_to_points(image, pose, options.lattice);
-  }
-  if (job.kind == Kind::cloud) {
-    const PointCloud cloud = read_point_cloud(job.file);
+    points = range_image_to_points(image, pose, options.lattice);
+  } else if (job.kind == Kind::cloud) {
+    PointCloud cloud = read_point_cloud(job.file, job.origin);
     *warnings = cloud.warnings;
     *estimated = cloud.normals.empty();
+    move_origin(&cloud.positions, cloud.origin, job.origin);
     CloudNormalOptions cloud_options = options.cloud;
     cloud_options.threads = threads;
     return cloud_to_oriented_points(cloud, cloud_options);
+  } else {
+    points = mesh_to_oriented_points(read_mesh(job.file));
+    if (lower_extension(job.file) == ".ply") {
+      const std::string skipped = ply_header_warning(job.file);
+      if (!skipped.empty()) warnings->push_back(skipped);
+    }
   }
-  return mesh_to_oriented_points(read_mesh(job.file));
+  move_origin(&points.positions, Vec3d::Zero(), job.origin);
+  return points;
 }
 
 // Reads jobs [from, to) in parallel (one alone gets every core for its own
@@ -206,6 +238,7 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
             [&](OrientedPoints&& part) { parts.push_back(std::move(part)); });
   progress.finish();
   OrientedPoints points = merge_parts(&parts);
+  local.origin = jobs.front().origin;
   if (report) *report = std::move(local);
   return points;
 }
@@ -251,6 +284,7 @@ void stream_oriented_points(const std::vector<std::string>& inputs, const Acquis
   AcquisitionReport local;
   AcquisitionReport& r = report ? *report : local;
   r = AcquisitionReport();
+  r.origin = jobs.front().origin;
   // As many files at once as there are cores: in memory are those only.
   const std::size_t window = std::size_t(std::max(1, options.threads > 0 ? options.threads : omp_get_max_threads()));
   Progress progress("reading inputs", jobs.size());

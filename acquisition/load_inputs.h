@@ -1,7 +1,7 @@
 // Everything a user may point scan2lod at becomes one set of oriented points in a
 // common frame: a Stanford .conf with its range-grid PLYs, single range-grid PLYs,
 // organized PCDs, point clouds (vertex-only .ply, unorganized .pcd, .xyz/.pts
-// text), or meshes (.ply with faces, .obj, .off, .stl).
+// text, LAS), or meshes (.ply with faces, .obj, .off, .stl).
 #pragma once
 
 #include "acquisition/cloud_normals.h"
@@ -30,6 +30,13 @@ struct AcquisitionReport {
   std::size_t clouds_estimated = 0;   // of those, the ones whose normals were estimated
   std::vector<std::string> files;  // every file read, in order
   std::vector<std::string> warnings;  // what the readers skipped, file by file
+  // The point of the inputs' own frame that the loaded points are relative
+  // to: input frame = origin + point, added in double. Zero unless an input
+  // is LAS: georeferenced coordinates (10^5 to 10^7 m) do not fit a float
+  // within the file's scale, so every input is shifted by the first LAS
+  // input's origin (acquisition/las_file.h, las_local_origin()). Outputs
+  // that should lie in the inputs' frame add it back.
+  Vec3d origin = Vec3d::Zero();
 };
 
 // @param[in] inputs  paths; the kind is told by extension and, for .ply, by header

@@ -3,6 +3,7 @@
 #include "core/error.h"
 
 #include <cctype>
+#include <fstream>
 #include <sstream>
 
 namespace scan2lod {
@@ -87,6 +88,15 @@ std::string ignored_lines_warning(const std::string& path, const PlyHeader& head
   return path + ": header line " + std::to_string(first.number) + " ('" + shown_line(first.text) + "')" +
          (more ? " and " + std::to_string(more) + " more" : "") +
          ": no PLY keyword (ply, format, comment, obj_info, element, property, end_header); skipped";
+}
+
+std::string ply_header_warning(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  try {
+    return ignored_lines_warning(path, read_ply_header(path, in));
+  } catch (const InputError&) {
+    return "";
+  }
 }
 
 }  // namespace scan2lod

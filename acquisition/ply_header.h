@@ -60,6 +60,12 @@ std::size_t ply_scalar_size(const std::string& type);
 // of them; empty when there are none.
 std::string ignored_lines_warning(const std::string& path, const PlyHeader& header);
 
+// The same warning for the PLY file at `path`, whatever its elements (a mesh's
+// too: io/mesh_file.cpp reads mesh headers for OpenMesh and skips such lines
+// without a word). Empty when there are none, or when the header cannot be
+// read: then the reader of the file's kind says what is wrong.
+std::string ply_header_warning(const std::string& path);
+
 // A line as it may appear in a message: bounded and printable.
 std::string shown_line(const std::string& line);
 

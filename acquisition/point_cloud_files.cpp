@@ -1,6 +1,7 @@
 #include "acquisition/point_cloud_files.h"
 
 #include "acquisition/ply_header.h"
+#include "acquisition/text_records.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
 
@@ -21,13 +22,6 @@ bool little_endian() {
   unsigned char first;
   std::memcpy(&first, &one, 1);
   return first == 1;
-}
-
-std::string read_whole(const std::string& path, std::size_t offset = 0) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open file");
-  in.seekg(std::streamoff(offset));
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 // ---------------------------------------------------------------------------
@@ -165,22 +159,6 @@ void store_vertex(const VertexLayout& L, const double* values, std::size_t i, Po
     for (int c = 0; c < 3; ++c) cloud->colors[i][c] = std::uint8_t(std::clamp(values[L.rgb[c]], 0.0, 255.0));
 }
 
-// Splits text into lines lazily; `number` counts from 1.
-struct LineReader {
-  const std::string& text;
-  std::size_t at = 0, number = 0;
-  bool next(std::string_view* line) {
-    if (at >= text.size()) return false;
-    std::size_t end = text.find('\n', at);
-    if (end == std::string::npos) end = text.size();
-    *line = std::string_view(text).substr(at, end - at);
-    if (!line->empty() && line->back() == '\r') line->remove_suffix(1);
-    at = end + 1;
-    ++number;
-    return true;
-  }
-};
-
 // Parses the blank-separated numbers of a line into values (at most max);
 // returns how many there were, or -1 for a token that is not a number.
 int parse_numbers(std::string_view line, double* values, int max) {
@@ -206,21 +184,24 @@ void read_ply_body(const std::string& path, const VertexLayout& L, PointCloud* c
   const std::size_t n = L.vertices;
   std::vector<double> values(L.types.size());
   if (L.format == PlyHeader::Format::ascii) {
-    const std::string text = read_whole(path, L.header_bytes);
-    LineReader lines{text};
-    std::string_view line;
-    for (std::size_t i = 0; i < n; ++i) {
-      do {
-        if (!lines.next(&line))
-          throw InputError(path, "file ends at vertex " + std::to_string(i) + " of " + std::to_string(n) +
-                                     " (truncated)");
-      } while (line.find_first_not_of(" \t") == std::string_view::npos);
-      const int count = parse_numbers(line, values.data(), int(values.size()));
-      if (count != int(values.size()))
-        throw InputError(path, "vertex " + std::to_string(i) + " needs " + std::to_string(values.size()) +
+    // Vertex lines are the body's first n that are not blank, parsed on all cores.
+    const std::string text = read_file_from(path, L.header_bytes);
+    auto not_blank = [](std::string_view line) { return line.find_first_not_of(" \t") != std::string_view::npos; };
+    const std::vector<TextBlock> blocks = cut_records(text, 1, n, not_blank);
+    if (record_count(blocks) < n)
+      throw InputError(path, "file ends at vertex " + std::to_string(record_count(blocks)) + " of " + std::to_string(n) +
+                                 " (truncated)");
+    const std::size_t properties = L.types.size();
+    parse_records(blocks, not_blank, [&](std::string_view line, std::size_t, std::size_t i) {
+      double few[64];
+      std::vector<double> many(properties > 64 ? properties : 0);
+      double* v = properties > 64 ? many.data() : few;
+      const int count = parse_numbers(line, v, int(properties));
+      if (count != int(properties))
+        throw InputError(path, "vertex " + std::to_string(i) + " needs " + std::to_string(properties) +
                                    " numbers, got '" + shown_line(std::string(line)) + "'");
-      store_vertex(L, values.data(), i, cloud);
-    }
+      store_vertex(L, v, i, cloud);
+    });
     return;
   }
   std::error_code ec;
@@ -265,50 +246,88 @@ PointCloud read_point_cloud_ply(const std::string& path) {
   return cloud;
 }
 
+namespace {
+
+// What the first data line of a .xyz/.pts file says the others hold.
+struct TextColumns {
+  int columns = 0;
+  bool normals = false, colors = false;
+};
+
+bool is_data_line(std::string_view line) {
+  const std::size_t first = line.find_first_not_of(" \t");
+  return first != std::string_view::npos && line[first] != '#' && line.substr(first, 2) != "//";
+}
+
+[[noreturn]] void fail_at_line(const std::string& path, std::size_t number, std::string_view line,
+                               const std::string& what) {
+  throw InputError(path, "line " + std::to_string(number) + " ('" + shown_line(std::string(line)) + "'): " + what);
+}
+
+// Phase: the lines up to the first point, which decides the columns; `at`
+// is left at that point's line, `number` at its number.
+TextColumns read_columns(const std::string& path, std::string_view text, std::size_t* at, std::size_t* number) {
+  const char* p = text.data();
+  const char* const end = text.data() + text.size();
+  bool first = true;
+  for (*number = 1; p < end; ++*number) {
+    const char* start = p;
+    const std::string_view line = next_line(p, end);
+    if (!is_data_line(line)) continue;
+    double v[10];
+    const int count = parse_numbers(line, v, 10);
+    if (count < 0) fail_at_line(path, *number, line, "expected numbers only");
+    // A .pts file starts with its point count.
+    if (first && count == 1 && v[0] >= 0 && v[0] == std::floor(v[0])) {
+      first = false;
+      continue;
+    }
+    if (count != 3 && count != 4 && count != 6 && count != 7 && count != 9)
+      fail_at_line(path, *number, line,
+                   "expected 3 (x y z), 4 (x y z i), 6 (x y z nx ny nz, or x y z r g b), 7 (x y z i r g b) or "
+                   "9 (x y z nx ny nz r g b) values, got " + std::to_string(count));
+    TextColumns c;
+    c.columns = count;
+    const double length = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+    c.normals = count == 9 || (count == 6 && std::fabs(length - 1.0) < 0.01);
+    c.colors = count == 7 || count == 9 || (count == 6 && !c.normals);
+    *at = std::size_t(start - text.data());
+    return c;
+  }
+  throw InputError(path, "holds no points (expected lines of 'x y z ...')");
+}
+
+}  // namespace
+
 PointCloud read_point_cloud_text(const std::string& path) {
-  const std::string text = read_whole(path);
+  const std::string text = read_file_from(path);
+  std::size_t at = 0, number = 1;
+  const TextColumns c = read_columns(path, text, &at, &number);
+  const std::vector<TextBlock> blocks =
+      cut_records(std::string_view(text).substr(at), number, std::size_t(-1), is_data_line);
+  const std::size_t n = record_count(blocks);
   PointCloud cloud;
   cloud.source = path;
-  LineReader lines{text};
-  std::string_view line;
-  int columns = 0;  // of the first data line
-  bool normals = false, colors = false;
-  double v[10];
-  while (lines.next(&line)) {
-    const std::size_t first = line.find_first_not_of(" \t");
-    if (first == std::string_view::npos || line[first] == '#' || line.substr(first, 2) == "//") continue;
+  cloud.positions.resize(n);
+  if (c.normals) cloud.normals.resize(n);
+  if (c.colors) cloud.colors.resize(n);
+  parse_records(blocks, is_data_line, [&](std::string_view line, std::size_t number, std::size_t i) {
+    double v[10];
     const int count = parse_numbers(line, v, 10);
-    auto fail = [&](const std::string& what) {
-      throw InputError(path, "line " + std::to_string(lines.number) + " ('" + shown_line(std::string(line)) +
-                                 "'): " + what);
-    };
-    if (count < 0) fail("expected numbers only");
-    if (columns == 0) {
-      // A .pts file starts with its point count.
-      if (count == 1 && cloud.positions.empty() && v[0] >= 0 && v[0] == std::floor(v[0])) continue;
-      if (count != 3 && count != 4 && count != 6 && count != 7 && count != 9)
-        fail("expected 3 (x y z), 4 (x y z i), 6 (x y z nx ny nz, or x y z r g b), 7 (x y z i r g b) or "
-             "9 (x y z nx ny nz r g b) values, got " + std::to_string(count));
-      columns = count;
-      const double length = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
-      normals = count == 9 || (count == 6 && std::fabs(length - 1.0) < 0.01);
-      colors = count == 7 || count == 9 || (count == 6 && !normals);
-    }
-    if (count != columns)
-      fail("has " + std::to_string(count) + " values, the first point had " + std::to_string(columns));
-    cloud.positions.emplace_back(float(v[0]), float(v[1]), float(v[2]));
-    if (normals) cloud.normals.emplace_back(float(v[3]), float(v[4]), float(v[5]));
-    if (colors) {
-      const int c0 = columns == 6 ? 3 : columns - 3;
-      Rgb rgb;
-      for (int c = 0; c < 3; ++c) {
-        if (!(v[c0 + c] >= 0 && v[c0 + c] <= 255)) fail("colour values must lie in 0 to 255");
-        rgb[c] = std::uint8_t(v[c0 + c] + 0.5);
+    if (count < 0) fail_at_line(path, number, line, "expected numbers only");
+    if (count != c.columns)
+      fail_at_line(path, number, line,
+                   "has " + std::to_string(count) + " values, the first point had " + std::to_string(c.columns));
+    cloud.positions[i] = Vec3f(float(v[0]), float(v[1]), float(v[2]));
+    if (c.normals) cloud.normals[i] = Vec3f(float(v[3]), float(v[4]), float(v[5]));
+    if (c.colors) {
+      const int c0 = c.columns == 6 ? 3 : c.columns - 3;
+      for (int k = 0; k < 3; ++k) {
+        if (!(v[c0 + k] >= 0 && v[c0 + k] <= 255)) fail_at_line(path, number, line, "colour values must lie in 0 to 255");
+        cloud.colors[i][std::size_t(k)] = std::uint8_t(v[c0 + k] + 0.5);
       }
-      cloud.colors.push_back(rgb);
     }
-  }
-  if (cloud.positions.empty()) throw InputError(path, "holds no points (expected lines of 'x y z ...')");
+  });
   return cloud;
 }
 

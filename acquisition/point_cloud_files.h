@@ -19,6 +19,13 @@ struct PointCloud {
   std::vector<Vec3f> normals;  // empty, or one per point (as written: not yet checked)
   std::vector<Rgb> colors;     // empty, or one per point
   std::optional<Vec3f> viewpoint;  // the sensor's position, when the file gives one
+  // The direction toward a sensor too far away to have a position (airborne
+  // LiDAR: +Z); normals are oriented to face it where there is no viewpoint.
+  std::optional<Vec3f> sensor_direction;
+  // The point of the file's own frame that positions are relative to: file
+  // frame = origin + position. Zero but for georeferenced files (LAS), whose
+  // coordinates a float cannot hold within the file's scale.
+  Vec3d origin = Vec3d::Zero();
   std::string source;              // file it came from, for messages
   std::vector<std::string> warnings;  // what the reader skipped, for the user
   std::size_t size() const { return positions.size(); }

@@ -1,6 +1,7 @@
 #include "acquisition/range_grid_ply.h"
 
 #include "acquisition/ply_header.h"
+#include "acquisition/text_records.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
 
@@ -326,46 +327,53 @@ RangeImage decode_binary(const std::string& path, const PlyLayout& L) {
   return image;
 }
 
-// An ASCII range grid without packed colours, parsed once with
-// std::from_chars and checked as it goes (check_ascii_body's complaints),
-// then laid out as decode_binary does. PCL's reader parsed the body again
-// through streams: the bunny's ten ASCII scans took 1.4 s.
-RangeImage decode_ascii(const std::string& path, std::ifstream& in, const PlyLayout& L) {
-  const std::string body((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const char* at = body.data();
-  const char* const end = body.data() + body.size();
-  auto next_line = [&](std::string_view* line) {
-    if (at >= end) return false;
-    const char* stop = static_cast<const char*>(std::memchr(at, '\n', std::size_t(end - at)));
-    if (!stop) stop = end;
-    *line = std::string_view(at, std::size_t(stop - at));
-    if (!line->empty() && line->back() == '\r') line->remove_suffix(1);
-    at = stop < end ? stop + 1 : end;
-    return true;
-  };
-  // A number as strtod reads it (blanks first, an optional '+'), to the
-  // type's precision. A float out of float's range (1e-50, 1e39) is read as
-  // a double and narrowed, as PCL's reader did, not refused.
-  auto number = [](const char*& s, const char* stop, bool as_float, double* out) {
-    while (s < stop && (*s == ' ' || *s == '\t')) ++s;
-    if (s < stop && *s == '+') ++s;
-    if (as_float) {
-      float f = 0;
-      const std::from_chars_result r = std::from_chars(s, stop, f);
-      if (r.ec == std::errc() && r.ptr != s) {
-        s = r.ptr;
-        *out = f;
-        return std::isfinite(f);
-      }
-      if (r.ec != std::errc::result_out_of_range) return false;
+// A number as strtod reads it (blanks first, an optional '+'), to the
+// type's precision. A float out of float's range (1e-50, 1e39) is read as
+// a double and narrowed, as PCL's reader did, not refused.
+bool ascii_number(const char*& s, const char* stop, bool as_float, double* out) {
+  while (s < stop && (*s == ' ' || *s == '\t')) ++s;
+  if (s < stop && *s == '+') ++s;
+  if (as_float) {
+    float f = 0;
+    const std::from_chars_result r = std::from_chars(s, stop, f);
+    if (r.ec == std::errc() && r.ptr != s) {
+      s = r.ptr;
+      *out = f;
+      return std::isfinite(f);
     }
-    double wide = 0;
-    const std::from_chars_result r = std::from_chars(s, stop, wide);
-    if (r.ec != std::errc() || r.ptr == s || !std::isfinite(wide)) return false;
-    s = r.ptr;
-    *out = as_float ? double(float(wide)) : wide;
-    return true;
-  };
+    if (r.ec != std::errc::result_out_of_range) return false;
+  }
+  double wide = 0;
+  const std::from_chars_result r = std::from_chars(s, stop, wide);
+  if (r.ec != std::errc() || r.ptr == s || !std::isfinite(wide)) return false;
+  s = r.ptr;
+  *out = as_float ? double(float(wide)) : wide;
+  return true;
+}
+
+bool ascii_integer(const char*& s, const char* stop, long long* out) {
+  while (s < stop && (*s == ' ' || *s == '\t')) ++s;
+  if (s < stop && *s == '+') ++s;
+  const std::from_chars_result r = std::from_chars(s, stop, *out);
+  if (r.ec != std::errc() || r.ptr == s) return false;
+  s = r.ptr;
+  return true;
+}
+
+// An ASCII range grid without packed colours, parsed once with
+// std::from_chars on all cores (acquisition/text_records.h) and checked as
+// it goes (check_ascii_body's complaints), then laid out as decode_binary
+// does: the vertex lines first, then the cells that name them. PCL's reader
+// parsed the body again through streams: the bunny's ten ASCII scans took 1.4 s.
+RangeImage decode_ascii(const std::string& path, const PlyLayout& L) {
+  const std::string body = read_file_from(path, L.header_bytes);
+  // Every vertex and cell takes a line, of a byte at least: the header's
+  // counts must fit before the grid is sized by them.
+  if (std::uint64_t(L.vertices) + std::uint64_t(L.grid_cells) > body.size() + 1)
+    throw InputError(path, "the body has " + std::to_string(body.size()) + " bytes, too few for the header's " +
+                               std::to_string(L.vertices) + " vertices and " + std::to_string(L.grid_cells) +
+                               " range_grid cells (truncated)");
+  auto every_line = [](std::string_view) { return true; };
   // What each property is to the image: x, y, z (float: read_layout), confidence (any scalar, as PCL
   // read it), red, green, blue (one byte each).
   static const char* kNames[7] = {"x", "y", "z", "confidence", "red", "green", "blue"};
@@ -383,61 +391,55 @@ RangeImage decode_ascii(const std::string& path, std::ifstream& in, const PlyLay
   const bool colors = has[4] && has[5] && has[6];
   std::vector<float> values(L.vertices * 4, 0.f);
   std::vector<Rgb> vertex_colors(colors ? L.vertices : 0);
-  std::string_view line;
-  for (std::size_t v = 0; v < L.vertices; ++v) {
-    const std::size_t line_no = L.header_lines + 1 + v;
-    if (!next_line(&line))
-      throw InputError(path, "file ends at vertex " + std::to_string(v) + " of " + std::to_string(L.vertices) +
-                                 " (truncated)");
+  const std::vector<TextBlock> vertex_lines = cut_records(body, L.header_lines + 1, L.vertices, every_line);
+  parse_records(vertex_lines, every_line, [&](std::string_view line, std::size_t line_no, std::size_t v) {
     const char* s = line.data();
     const char* const stop = line.data() + line.size();
     for (std::size_t k = 0; k < L.vertex_properties; ++k) {
       double value = 0;
-      if (!number(s, stop, single[k] != 0, &value))
+      if (!ascii_number(s, stop, single[k] != 0, &value))
         throw InputError(path, "line " + std::to_string(line_no) + ": vertex " + std::to_string(v) + " needs " +
                                    std::to_string(L.vertex_properties) + " finite numbers, got '" + std::string(line) +
                                    "'");
       if (role[k] >= 4) vertex_colors[v][std::size_t(role[k] - 4)] = std::uint8_t(std::clamp(value, 0.0, 255.0));
       else if (role[k] >= 0) values[4 * v + std::size_t(role[k])] = float(value);
     }
-  }
+  });
+  if (record_count(vertex_lines) < L.vertices)
+    throw InputError(path, "file ends at vertex " + std::to_string(record_count(vertex_lines)) + " of " +
+                               std::to_string(L.vertices) + " (truncated)");
+  const std::size_t cells_at =
+      vertex_lines.empty() ? 0 : std::size_t(vertex_lines.back().text.data() + vertex_lines.back().text.size() - body.data());
   RangeImage image = empty_image(path, L, has[3], colors);
   const std::size_t n = image.points.size();
-  for (std::size_t c = 0; c < L.grid_cells; ++c) {
-    const std::size_t line_no = L.header_lines + 1 + L.vertices + c;
-    if (!next_line(&line))
-      throw InputError(path, "file ends at range_grid cell " + std::to_string(c) + " of " +
-                                 std::to_string(L.grid_cells) + " (truncated)");
+  const std::vector<TextBlock> cell_lines =
+      cut_records(std::string_view(body).substr(cells_at), L.header_lines + 1 + L.vertices, L.grid_cells, every_line);
+  parse_records(cell_lines, every_line, [&](std::string_view line, std::size_t line_no, std::size_t c) {
     const char* s = line.data();
     const char* const stop = line.data() + line.size();
-    auto integer = [&](long long* out) {
-      while (s < stop && (*s == ' ' || *s == '\t')) ++s;
-      if (s < stop && *s == '+') ++s;
-      const std::from_chars_result r = std::from_chars(s, stop, *out);
-      if (r.ec != std::errc() || r.ptr == s) return false;
-      s = r.ptr;
-      return true;
-    };
     long long count = -1;
-    if (!integer(&count) || count < 0 || count > 255)
+    if (!ascii_integer(s, stop, &count) || count < 0 || count > 255)
       throw InputError(path, "line " + std::to_string(line_no) + ": range_grid cell " + std::to_string(c) +
                                  " must start with an index count");
     long long first = -1;
     for (long long k = 0; k < count; ++k) {
       long long index = -1;
-      if (!integer(&index) || index < 0 || std::size_t(index) >= L.vertices)
+      if (!ascii_integer(s, stop, &index) || index < 0 || std::size_t(index) >= L.vertices)
         throw InputError(path, "line " + std::to_string(line_no) + ": range_grid cell " + std::to_string(c) +
                                    " has a vertex index outside [0, " + std::to_string(L.vertices) + ")");
       if (k == 0) first = index;
     }
     check_cell_order(path, L, c, count, first);
-    if (count == 0 || c >= n) continue;
+    if (count == 0 || c >= n) return;
     const float* f = &values[4 * std::size_t(first)];
     const Vec3f point(f[0], f[1], f[2]);
     if (point.allFinite()) image.points[c] = point;
     if (has[3]) image.confidence[c] = f[3];
     if (colors) image.colors[c] = vertex_colors[std::size_t(first)];
-  }
+  });
+  if (record_count(cell_lines) < L.grid_cells)
+    throw InputError(path, "file ends at range_grid cell " + std::to_string(record_count(cell_lines)) + " of " +
+                               std::to_string(L.grid_cells) + " (truncated)");
   return image;
 }
 
@@ -446,7 +448,7 @@ RangeImage read_range_grid(const std::string& path, std::string* warning) {
   if (!in) throw InputError(path, "cannot open file");
   PlyLayout L = read_layout(path, in);
   *warning = L.warning;
-  if (L.format == PlyHeader::Format::ascii && !needs_pcl(L)) return decode_ascii(path, in, L);
+  if (L.format == PlyHeader::Format::ascii && !needs_pcl(L)) return decode_ascii(path, L);
   if (L.format == PlyHeader::Format::ascii) check_ascii_body(path, in, L);
   in.close();
   if (L.format != PlyHeader::Format::ascii) {

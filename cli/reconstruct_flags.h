@@ -15,7 +15,7 @@ namespace scan2lod::cli {
 
 // The inputs `reconstruct` and `build` read (acquisition/load_inputs.cpp, classify()).
 inline const char* const kInputsHelp =
-    "Range scans (a .conf, range-grid PLYs, organized PCDs), a point cloud (.ply .pcd .xyz .xyzn .xyzrgb .pts; "
+    "Range scans (a .conf, range-grid PLYs, organized PCDs), a point cloud (.ply .pcd .xyz .xyzn .xyzrgb .pts .las; "
     "normals estimated when it has none), or a mesh (.ply .obj .off .stl .vtp .glb .gltf)";
 
 struct ReconstructFlags {

@@ -348,7 +348,14 @@ ExpectedCounts check_ply_header(const std::string& path) {
       expect_words(1, "end_header");
       ended = true;
     } else if (key != "comment" && key != "obj_info" && !key.empty()) {
-      throw InputError(path, where + ": unknown keyword '" + key + "'");
+      // A line of no PLY keyword outside any definition (Stanford's
+      // happy_stand scans carry 'bye' lines) carries nothing a reader needs;
+      // OpenMesh skips its words one by one, as it does obj_info's, so the
+      // same guard applies. The warning is the caller's to give
+      // (acquisition/ply_header.h, ply_header_warning()).
+      if (has_keyword)
+        throw InputError(path, where + ": a line of no PLY keyword holds one ('" + line +
+                                   "'), which OpenMesh would read as one");
     }
   }
   if (!ended) throw InputError(path, "PLY header has no end_header line");

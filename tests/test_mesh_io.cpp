@@ -1,5 +1,6 @@
 // Mesh files: every format gives back what was written, and broken files give
 // an InputError that names the problem instead of a crash or a partial mesh.
+#include "acquisition/load_inputs.h"
 #include "core/error.h"
 #include "io/mesh_file.h"
 
@@ -9,6 +10,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -247,6 +249,54 @@ TEST(MeshIo, PlyHeaderWordsOpenMeshWouldReadOtherwiseAreInputErrors) {
   expect_read_errors(dir, cases);
   spit(dir / "fine.ply", "ply\nformat ascii 1.0\ncomment element property end_header\n" + body);
   EXPECT_EQ(try_read(dir / "fine.ply"), Outcome::read);
+}
+
+// Stanford's happy_stand scans carry 'bye' lines among their header lines. A
+// line of no PLY keyword carries nothing a reader needs: the mesh reads as
+// without it, and acquisition warns once, naming the file and the first line.
+TEST(MeshIo, PlyHeaderLinesOfNoKeywordAreSkippedWithOneWarning) {
+  const fs::path dir = scratch("ply_bye");
+  auto with_bye = [](std::string bytes) {
+    bytes.insert(bytes.find("element face"), "bye\n");
+    bytes.insert(bytes.find('\n', bytes.find("format")) + 1, "bye\n");
+    return bytes;
+  };
+  const std::string ascii_header =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string ascii_body = "0 0 0\n1 0 0\n0 1 0.25\n1 1 0\n3 0 1 2\n3 1 3 2\n";
+  write_mesh((dir / "binary.ply").string(), small_mesh());
+  spit(dir / "ascii.ply", ascii_header + ascii_body);
+  for (const char* name : {"binary.ply", "ascii.ply"}) {
+    SCOPED_TRACE(name);
+    const fs::path plain = dir / name, odd = dir / (std::string("bye_") + name);
+    spit(odd, with_bye(slurp(plain)));
+    TriangleMesh a, b;
+    ASSERT_EQ(try_read(plain, &a), Outcome::read);
+    ASSERT_EQ(try_read(odd, &b), Outcome::read) << error_of(odd.string());
+    ASSERT_EQ(a.positions.size(), b.positions.size());
+    EXPECT_EQ(std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(Vec3f)), 0);
+    EXPECT_EQ(a.triangles, b.triangles);
+    EXPECT_EQ(a.colors, b.colors);
+    AcquisitionReport plain_report, odd_report;
+    load_oriented_points({plain.string()}, {}, &plain_report);
+    load_oriented_points({odd.string()}, {}, &odd_report);
+    EXPECT_TRUE(plain_report.warnings.empty());
+    ASSERT_EQ(odd_report.warnings.size(), 1u);
+    EXPECT_NE(odd_report.warnings[0].find(odd.string() + ": header line 3 ('bye') and 1 more"), std::string::npos)
+        << odd_report.warnings[0];
+  }
+  // What was refused before still is, with such lines or without.
+  const std::vector<BadFile> cases = {
+      {"bye_holds_keyword.ply", "ply\nformat ascii 1.0\nbye element\n" + ascii_header.substr(21) + ascii_body,
+       "line 3: a line of no PLY keyword holds one"},
+      {"bye_before_format.ply", "ply\nbye\n" + ascii_header.substr(4) + ascii_body, "right after 'ply'"},
+      {"bye_bad_element.ply", with_bye(ascii_header + ascii_body).replace(with_bye(ascii_header).find("vertex 4"), 8, "vertex four"),
+       "expected 'element NAME COUNT'"},
+      {"bye_short_body.ply", with_bye(ascii_header) + "0 0 0\n1 0 0\n0 1 0\n", "truncated"},
+      {"bye_no_end_header.ply", "ply\nformat ascii 1.0\nbye\nelement vertex 4\nproperty float x\n", "end_header"},
+  };
+  expect_read_errors(dir, cases);
 }
 
 TEST(MeshIo, EveryTruncationOfABinaryPlyIsAnInputError) {

@@ -18,6 +18,7 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -177,6 +178,57 @@ TEST(PointCloudFiles, UnorganizedPcdIsACloudWithItsNormals) {
   EXPECT_EQ(report.clouds, 1u);
   EXPECT_EQ(report.clouds_estimated, 0u);
   EXPECT_EQ(points.size(), 500u);
+}
+
+// Text bodies are cut into 1 MB line blocks parsed on all cores
+// (acquisition/text_records.h): a file of many blocks reads every point in
+// file order, and the line named for a bad value is the file's own.
+TEST(PointCloudFiles, LargeTextFilesReadInOrderAndNameTheirBadLine) {
+  const std::size_t n = 200000;  // about 9 MB of text: several blocks
+  std::string text = "# x y z nx ny nz, a comment and a blank line first\n\n";
+  std::vector<std::size_t> line_of(n);
+  std::size_t lines = 2;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i % 1000 == 999) text += "\n", ++lines;  // blank lines inside, skipped
+    text += std::to_string(i) + " " + std::to_string(0.5 * double(i % 7)) + " -" + std::to_string(i % 13) +
+            " 0 0 1\n";
+    line_of[i] = ++lines;
+  }
+  const fs::path path = scratch("large.xyz");
+  spit(path, text);
+  const PointCloud c = read_point_cloud_text(path.string());
+  ASSERT_EQ(c.size(), n);
+  ASSERT_EQ(c.normals.size(), n);
+  for (std::size_t i = 0; i < n; ++i)
+    ASSERT_EQ(c.positions[i], Vec3f(float(i), float(0.5 * double(i % 7)), -float(i % 13))) << i;
+  // Two bad lines in different blocks: the first is named, with its line number.
+  std::string bad = text;
+  for (const std::size_t i : {std::size_t(150000), std::size_t(123456)}) {
+    const std::size_t at = bad.find("\n" + std::to_string(i) + " ") + 1;
+    bad.replace(at, std::to_string(i).size(), "x" + std::to_string(i));
+  }
+  spit(path, bad);
+  EXPECT_NE(input_error([&] { read_point_cloud_text(path.string()); })
+                .find("line " + std::to_string(line_of[123456]) + " ('x123456"),
+            std::string::npos);
+  // The same points as an ASCII PCD (PCL's writer) read as the binary one does, to PCL's 8 digits.
+  pcl::PointCloud<pcl::PointNormal> pc;
+  for (std::size_t i = 0; i < n; i += 7) {
+    pcl::PointNormal q;
+    q.getVector3fMap() = c.positions[i] * 1.0001f;
+    q.getNormalVector3fMap() = Vec3f(0.6f, 0.f, 0.8f);
+    pc.push_back(q);
+  }
+  const fs::path ascii = scratch("large_ascii.pcd"), binary = scratch("large_binary.pcd");
+  pcl::io::savePCDFileASCII(ascii.string(), pc);
+  pcl::io::savePCDFileBinary(binary.string(), pc);
+  const PointCloud a = read_unorganized_pcd(ascii.string()), b = read_unorganized_pcd(binary.string());
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_EQ(a.normals.size(), b.normals.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_LE((a.positions[i] - b.positions[i]).norm(), 1e-7f * (1.f + b.positions[i].norm())) << i;
+    ASSERT_LE((a.normals[i] - b.normals[i]).norm(), 1e-7f) << i;
+  }
 }
 
 TEST(CloudNormals, EstimatedNormalsOfASpherePointOutward) {

@@ -18,6 +18,14 @@
 #         cd build-fuzz/inputs && LSAN_OPTIONS=suppressions=lsan.supp INPUTS_FUZZ_VERBOSE=1 ./inputs_fuzzer FILE
 #       Known, not ours: VTK 9.1 allocates the connectivity by the last value of a
 #       .vtp's offsets array (4 bytes x 2e9 from a 400-byte file), an oom-* finding.
+#   tests/fuzz/build.sh las [SECONDS]
+#       the LAS reader (las_fuzzer.cpp, acquisition/las_file.cpp alone): build
+#       with clang into build-fuzz/las_fuzzer, write seed files (LAS 1.1 to 1.4,
+#       point formats 0 to 10, with VLRs, EVLRs and extra bytes) into
+#       build-fuzz/las-seeds/ and fuzz for SECONDS (default 300) on all cores,
+#       corpus in build-fuzz/las-corpus/. Needs python3 for the seeds. A fixed
+#       number of inputs instead: tests/fuzz/build.sh las 0 -runs=1000000
+#       (SECONDS 0: no time limit).
 #   Extra arguments after SECONDS go to libFuzzer (e.g. -fork=1).
 # Needs clang, libomp-dev (Debian's clang and libomp-dev), cmake for `inputs`, and a
 # normal build (build/bin/scan2lod) for the seeds.
@@ -26,7 +34,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 repo="$(dirname "$(dirname "$here")")"
 out="$repo/build-fuzz"
 target=model
-if [[ "${1:-}" == model || "${1:-}" == inputs ]]; then
+if [[ "${1:-}" == model || "${1:-}" == inputs || "${1:-}" == las ]]; then
   target="$1"
   shift
 fi
@@ -55,6 +63,53 @@ if [[ "$target" == model ]]; then
   cd "$out"
   MODEL_FUZZ_SEED="$seed" ./model_fuzzer -max_total_time="$seconds" -jobs="$cores" -workers="$cores" \
     -max_len=600000 "$@" corpus
+  exit 0
+fi
+
+# --- las ------------------------------------------------------------------
+if [[ "$target" == las ]]; then
+  mkdir -p "$out/las-seeds" "$out/las-corpus"
+  clang++ -std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+    -I"$repo" -I/usr/include/eigen3 "$here/las_fuzzer.cpp" "$repo/acquisition/las_file.cpp" -o "$out/las_fuzzer"
+  python3 - "$out/las-seeds" <<'EOF'
+import struct, sys
+seeds = sys.argv[1]
+own = [20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67]
+rgb = [-1, -1, 20, 28, -1, 28, -1, 30, 30, -1, 30]
+def las(minor, fmt, n, extra, vlrs, evlrs):
+    size = 227 if minor <= 2 else 235 if minor == 3 else 375
+    length = own[fmt] + extra
+    vlr = b"".join(struct.pack("<H16sHH32s", 0, b"test", k, 6, b"") + bytes(6) for k in range(vlrs))
+    pts = b""
+    for i in range(n):
+        r = struct.pack("<3i", 1000 * i, -2000 * i, 300 + i) + bytes(length - 12)
+        if rgb[fmt] >= 0:
+            r = r[:rgb[fmt]] + struct.pack("<3H", 256 * i, 65535 - i, 7) + r[rgb[fmt] + 6:]
+        pts += r
+    h = bytearray(size)
+    h[0:4] = b"LASF"
+    h[24], h[25] = 1, minor
+    struct.pack_into("<HIIBHI", h, 94, size, size + len(vlr), vlrs, fmt, length,
+                     0 if minor == 4 and fmt >= 6 else n)
+    struct.pack_into("<3d3d", h, 131, 0.001, 0.001, 0.01, 500000.0, 5000000.0, 0.0)
+    struct.pack_into("<6d", h, 179, 500000 + n, 500000.0, 5000000.0, 5000000 - 2 * n, 3 + n, 3.0)
+    ev = b"".join(struct.pack("<H16sHQ32s", 0, b"test", k, 4, b"") + bytes(4) for k in range(evlrs))
+    if minor == 4:
+        struct.pack_into("<QIQ", h, 235, size + len(vlr) + len(pts) if evlrs else 0, evlrs, n)
+    return bytes(h) + vlr + pts + ev
+for minor in (1, 2, 3, 4):
+    for fmt in range(11):
+        if minor < 4 and fmt >= 6:
+            continue
+        with open(f"{seeds}/v1{minor}_f{fmt}", "wb") as f:
+            f.write(las(minor, fmt, 3, fmt % 3, fmt % 2, 1 if minor == 4 and fmt % 2 else 0))
+EOF
+  printf '"LASF"\n"\\x01\\x04"\n"\\x01\\x02"\n' > "$out/las.dict"
+  cd "$out"
+  limit=()
+  [[ "$seconds" != 0 ]] && limit=(-max_total_time="$seconds")
+  ./las_fuzzer "${limit[@]}" -jobs="$cores" -workers="$cores" -timeout=10 -rss_limit_mb=2048 -max_len=4096 \
+    -dict=las.dict "$@" las-corpus las-seeds
   exit 0
 fi
 
