@@ -50,7 +50,7 @@ void add_build_command(CLI::App& app) {
       ->default_str("both");
   cmd->add_option("--cluster-block", args->cluster_block,
                   "Triangles per block of the cluster hierarchy; with it the hierarchy is always built in blocks "
-                  "(default: from --memory)")
+                  "(default: 131072 above 1048576 triangles, the same at any --memory that holds them)")
       ->check(CLI::Range(std::int64_t(1024), std::int64_t(1) << 40));
   cmd->add_flag("-v,--verbose", args->verbose, "Print the time of each reconstruction stage");
   cmd->add_flag("--json", args->json, "Print the counts and stage times as JSON");

@@ -607,9 +607,32 @@ void lock_block_borders(Shared& s, Each each) {
 // Morton curve had staircase borders, and cuts up to 1.4x the in-core
 // error at 20 k-50 k triangles of 3.3 M.) Returns the blocks' starts, the
 // end last.
+//
+// The blocks and the order inside each depend on the triangles' positions
+// alone, not on the order they came in: the median by a total order, each
+// block sorted by it at the end. A surface welded from bricks numbers its
+// triangles otherwise than one made in core; the same blocks make it the
+// same hierarchy.
 std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vector<Triangle>* triangles, std::size_t block) {
   auto centroid = [&](const Triangle& t) {
     return positions[std::size_t(t[0])] + positions[std::size_t(t[1])] + positions[std::size_t(t[2])];
+  };
+  // Along `axis` first, then the other axes, then the corners: two
+  // triangles compare equal only where they are the same triangle.
+  auto before = [&](int axis) {
+    return [&, axis](const Triangle& a, const Triangle& b) {
+      const Vec3f ca = centroid(a), cb = centroid(b);
+      for (int k = 0; k < 3; ++k) {
+        const int i = (axis + k) % 3;
+        if (ca[i] != cb[i]) return ca[i] < cb[i];
+      }
+      for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < 3; ++i) {
+          const float pa = positions[std::size_t(a[std::size_t(c)])][i], pb = positions[std::size_t(b[std::size_t(c)])][i];
+          if (pa != pb) return pa < pb;
+        }
+      return false;
+    };
   };
   std::vector<std::size_t> starts;
   std::vector<std::pair<std::size_t, std::size_t>> todo{{0, triangles->size()}};
@@ -617,6 +640,7 @@ std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vect
     const auto [begin, end] = todo.back();
     todo.pop_back();
     if (end - begin <= block) {
+      std::sort(triangles->begin() + std::ptrdiff_t(begin), triangles->begin() + std::ptrdiff_t(end), before(0));
       starts.push_back(begin);
       continue;
     }
@@ -626,9 +650,7 @@ std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vect
     box.extent().maxCoeff(&axis);
     const std::size_t middle = begin + (end - begin) / 2;
     std::nth_element(triangles->begin() + std::ptrdiff_t(begin), triangles->begin() + std::ptrdiff_t(middle),
-                     triangles->begin() + std::ptrdiff_t(end), [&](const Triangle& a, const Triangle& b) {
-                       return centroid(a)[axis] < centroid(b)[axis];
-                     });
+                     triangles->begin() + std::ptrdiff_t(end), before(axis));
     todo.push_back({middle, end});
     todo.push_back({begin, middle});
   }
@@ -644,9 +666,9 @@ std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vect
 // block borders are simplified in the next. Each block runs one round with
 // the vertices it shares with other blocks locked, and what is left active
 // goes on; once it fits one block, the rounds run to the top in it.
-ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles) {
+ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std::int64_t block_triangles) {
   const ClusterOptions& options = *s.options;
-  std::size_t block = std::max<std::size_t>(std::size_t(options.block_triangles), 1024);
+  std::size_t block = std::max<std::size_t>(std::size_t(block_triangles), 1024);
   ClusterHierarchy out;
   out.full_triangles = std::int64_t(triangles.size());
   TriangleSpool* spool = options.spool.get();
@@ -793,6 +815,13 @@ std::vector<ClusterPage> cluster_pages(const ClusterHierarchy& h) {
   return pages;
 }
 
+std::int64_t block_triangles_for(std::int64_t options_block, std::size_t triangles) {
+  const std::int64_t block = options_block == kAutomaticBlocks
+                                 ? (std::int64_t(triangles) > kWholeMeshTriangles ? kBlockTriangles : 0)
+                                 : options_block;
+  return block > 0 && std::int64_t(triangles) > block ? block : 0;
+}
+
 ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
                                          ArrayView<Rgb> colors, std::vector<Triangle> triangles,
                                          const ClusterOptions& options) {
@@ -822,8 +851,8 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
   s.expected = 2.0 * double(triangles.size());
 
   ClusterHierarchy h;
-  if (options.block_triangles > 0 && triangles.size() > std::size_t(options.block_triangles)) {
-    h = build_in_blocks(s, std::move(triangles));
+  if (const std::int64_t block = block_triangles_for(options.block_triangles, triangles.size())) {
+    h = build_in_blocks(s, std::move(triangles), block);
   } else {
     // In core: the whole mesh is one block.
     Block all;

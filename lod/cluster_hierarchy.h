@@ -87,6 +87,21 @@ struct ClusterHierarchy {
   void load_spooled();                // the spool's triangles into `triangles`
 };
 
+// Blocks of a large mesh's hierarchy, the same whatever the memory: a
+// build within a budget (in bricks) and one without make the same
+// hierarchy, since the blocks, and the order inside each, follow from the
+// triangles' positions alone. 2^17 triangles take about 50 MiB of working
+// memory, which a 400 MiB budget holds beside a 4 M-triangle mesh.
+constexpr std::int64_t kBlockTriangles = std::int64_t(1) << 17;
+// Up to this many triangles the hierarchy is built whole: faster on two
+// cores, where blocks run one after another.
+constexpr std::int64_t kWholeMeshTriangles = std::int64_t(1) << 20;
+constexpr std::int64_t kAutomaticBlocks = -1;
+
+// The blocks `options_block` (ClusterOptions::block_triangles) gives a mesh
+// of `triangles`: 0 when it is built whole.
+std::int64_t block_triangles_for(std::int64_t options_block, std::size_t triangles);
+
 struct ClusterOptions {
   int cluster_triangles = 128;   // most triangles per cluster
   int group_clusters = 32;       // clusters per group, about (8 and 16 stall on the bunny: bench/lod)
@@ -116,8 +131,9 @@ struct ClusterOptions {
   // so that the build's working memory is a block's, not the mesh's: each
   // block simplified with the vertices it shares with other blocks locked,
   // then what is left regrouped across those borders, pass after pass.
-  // 0: the whole mesh at once.
-  std::int64_t block_triangles = 0;
+  // 0: the whole mesh at once. kAutomaticBlocks: the whole mesh up to
+  // kWholeMeshTriangles, blocks of kBlockTriangles above.
+  std::int64_t block_triangles = kAutomaticBlocks;
   // With block_triangles: finished clusters' triangles go here as each block
   // ends, not to memory (ClusterHierarchy::spool).
   std::shared_ptr<TriangleSpool> spool;

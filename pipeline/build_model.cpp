@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/vertex_order.h"
 #include "io/mesh_file.h"
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
@@ -73,6 +74,23 @@ std::int64_t cluster_block_for(double budget, std::size_t triangles, BuildReport
                                binary_size(blocked_cluster_bytes(triangles, kSmallestBlock)) +
                                " in its smallest blocks, over the budget of " + binary_size(budget));
   return std::max(block, kSmallestBlock);
+}
+
+// The hierarchy's blocks (0: whole): as asked, else those of every build
+// (block_triangles_for), unless the budget cannot hold them; then the
+// largest it holds, and the hierarchy is not the one a larger budget makes.
+std::int64_t choose_cluster_block(std::int64_t asked, std::size_t triangles, double budget, BuildReport* report) {
+  if (asked > 0) return asked;
+  const std::int64_t block = block_triangles_for(kAutomaticBlocks, triangles);
+  const double needs = block > 0 ? blocked_cluster_bytes(triangles, block) : kClusterBytesPerTriangle * double(triangles);
+  if (needs <= budget) return block;
+  const std::int64_t held = cluster_block_for(budget, triangles, report);
+  if (block > 0 && held >= block) return block;
+  if (block > 0)
+    report->warnings.push_back("the budget of " + binary_size(budget) + " holds cluster blocks of " +
+                               std::to_string(held) + " triangles, not " + std::to_string(block) +
+                               ": the hierarchy differs from the one a build with more memory makes");
+  return held;
 }
 
 // Phase 2: the strategy, from the in-core estimate against the budget.
@@ -256,9 +274,7 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
   if (options.clusters) {
     report.estimated_cluster_bytes = kClusterBytesPerTriangle * double(report.full_triangles);
     const double budget = report.budget_bytes > 0 ? report.budget_bytes : available_memory_bytes();
-    report.cluster_block = options.cluster_block;
-    if (report.cluster_block == 0 && report.estimated_cluster_bytes > budget)
-      report.cluster_block = cluster_block_for(budget, report.full_triangles, &report);
+    report.cluster_block = choose_cluster_block(options.cluster_block, report.full_triangles, budget, &report);
     if (report.cluster_block > 0 && report.full_triangles > std::size_t(report.cluster_block))
       report.estimated_cluster_bytes = blocked_cluster_bytes(report.full_triangles, report.cluster_block);
     Progress bar("clusters", 1000);
@@ -277,7 +293,13 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
     };
     if (mesh) add_cluster_hierarchy(&model, *mesh, false, clusters);
     else if (options.octree) add_cluster_hierarchy(&model, r.mesh, true, clusters);
-    else add_cluster_hierarchy(&model, std::move(r.mesh), false, clusters);
+    else {
+      // Meshlet walks and collapses break ties by vertex number: one order
+      // of the vertices makes the hierarchy of a surface welded from bricks
+      // that of the same surface made in core. (A mesh input keeps its own.)
+      order_vertices(&r.mesh);
+      add_cluster_hierarchy(&model, std::move(r.mesh), false, clusters);
+    }
     bar.finish();
   }
   report.seconds_clusters = seconds_since(stage);

@@ -33,7 +33,8 @@ struct BuildOptions {
   std::string work_dir;  // where bricks are kept; required when the build runs in bricks
   int brick_cubes = 0;   // cubes per brick side; 0: from the memory budget
   // Triangles per block of the cluster hierarchy (ClusterOptions::
-  // block_triangles); 0: in blocks only when the budget needs them, sized from it.
+  // block_triangles); 0: blocks of kBlockTriangles above kWholeMeshTriangles,
+  // smaller only when the budget cannot hold those.
   std::int64_t cluster_block = 0;
 };
 
