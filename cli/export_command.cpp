@@ -154,6 +154,7 @@ void add_export_command(CLI::App& app) {
     auto start = std::chrono::steady_clock::now();
     const LodModel model = load_model(args->model);
     const double load_seconds = seconds_since(start);
+    for (const std::string& out : outputs) check_mesh_output(out, model.origin, model_bounds(model));
     start = std::chrono::steady_clock::now();
     const LodStructure structure = structure_named(model, args->structure, args->model);
     ChainOptions options;
@@ -180,9 +181,12 @@ void add_export_command(CLI::App& app) {
       GltfOptions g;
       g.quantize = !args->no_quantize;
       g.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
+      g.origin = model.origin;  // back in the inputs' frame (georeferenced inputs)
       write_gltf_chain(args->output, chain.vertices, levels, g);
     } else {
-      for (std::size_t i = 0; i < chain.levels.size(); ++i) write_mesh(outputs[i], level_mesh(chain, i));
+      MeshWriteOptions write;
+      write.origin = model.origin;
+      for (std::size_t i = 0; i < chain.levels.size(); ++i) write_mesh(outputs[i], level_mesh(chain, i), write);
     }
     const double write_seconds = seconds_since(start);
 

@@ -154,6 +154,7 @@ void add_extract_command(CLI::App& app) {
     refuse_overwriting_inputs(args->output, {args->model});
 
     const LodModel model = load_model(args->model);
+    check_mesh_output(args->output, model.origin, model_bounds(model));
     // A priority number is the octree's own: it picks the octree when no structure is named.
     const LodStructure structure = structure_named(
         model, args->structure.empty() && priority->count() ? std::string("octree") : args->structure, args->model);
@@ -172,6 +173,7 @@ void add_extract_command(CLI::App& app) {
     MeshWriteOptions write;
     write.quantize = !args->no_quantize;
     write.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
+    write.origin = model.origin;  // back in the inputs' frame (georeferenced inputs)
     write_mesh(args->output, mesh, write);
 
     if (args->json) {

@@ -44,6 +44,9 @@ void add_reconstruct_command(CLI::App& app) {
     InputPoints points = load_within_budget(args->inputs, build, &report);
     for (const std::string& warning : report.warnings) warn(warning);
     refuse_overwriting_inputs(args->output, report.files);
+    // The mesh will lie about the inputs' origin, near their points: can the format hold it there?
+    check_mesh_output(args->output, report.origin,
+                      points.spool ? points.spool->census().box : bounds(points.points.positions));
     const double read_seconds = std::chrono::duration<double>(clock::now() - start).count();
     BuildOptions only_mesh = build;
     only_mesh.octree = only_mesh.clusters = false;
@@ -55,6 +58,7 @@ void add_reconstruct_command(CLI::App& app) {
     MeshWriteOptions write;
     write.quantize = !args->no_quantize;
     write.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
+    write.origin = report.origin;  // back in the inputs' frame (georeferenced inputs)
     const std::size_t vertices_written = write_mesh(args->output, r.mesh, write);
     args->flags.finished(report_bricks, build);
     const double write_seconds = std::chrono::duration<double>(clock::now() - write_start).count();

@@ -95,6 +95,16 @@ Quantization quantization_for(const std::vector<Vec3f>& positions) {
   return q;
 }
 
+// The node's translation: the file frame's origin, plus the quantization's
+// centre (position = centre + scale * stored, so the node's T * S maps the
+// stored values to origin + position); summed in double, as the JSON keeps it.
+// None for float positions without an origin, as before origins existed.
+std::vector<double> node_translation(const GltfOptions& options, const Quantization& q) {
+  if (!options.quantize && options.origin == Vec3d::Zero()) return {};
+  const Vec3d t = options.quantize ? Vec3d(options.origin + q.centre.cast<double>()) : options.origin;
+  return {t.x(), t.y(), t.z()};
+}
+
 Vec3f unit_or_up(const Vec3f& n) {
   const float length = n.norm();
   return length > 1e-12f && std::isfinite(length) ? Vec3f(n / length) : Vec3f(0, 0, 1);
@@ -171,7 +181,9 @@ int add_indices(BufferBuilder& b, const std::vector<Triangle>& triangles, std::s
   return b.add_accessor(view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, n, false);
 }
 
-void check_chain(const std::string& path, const TriangleMesh& vertices, const std::vector<GltfLevel>& levels) {
+void check_chain(const std::string& path, const TriangleMesh& vertices, const std::vector<GltfLevel>& levels,
+                 const GltfOptions& options) {
+  if (!options.origin.allFinite()) throw InputError(path, "cannot write glTF: the origin is not a finite point");
   const std::size_t n = vertices.positions.size();
   if (n == 0) throw InputError(path, "cannot write glTF: the mesh has no vertices");
   if (levels.empty()) throw InputError(path, "cannot write glTF: no level to write");
@@ -235,10 +247,8 @@ tinygltf::Model build_model(const TriangleMesh& vertices, const std::vector<Gltf
     tinygltf::Node node;
     node.name = level.name;
     node.mesh = int(model.meshes.size()) - 1;
-    if (options.quantize) {
-      node.translation = {q.centre.x(), q.centre.y(), q.centre.z()};
-      node.scale = {q.scale, q.scale, q.scale};
-    }
+    node.translation = node_translation(options, q);
+    if (options.quantize) node.scale = {q.scale, q.scale, q.scale};
     model.nodes.push_back(node);
   }
   if (levels.size() > 1) {
@@ -273,7 +283,7 @@ bool is_gltf_path(const std::string& path) {
 void write_gltf_chain(const std::string& path, const TriangleMesh& vertices, const std::vector<GltfLevel>& levels,
                       const GltfOptions& options) {
   if (!is_gltf_path(path)) throw InputError(path, "expected a .glb or .gltf file name");
-  check_chain(path, vertices, levels);
+  check_chain(path, vertices, levels, options);
   const bool binary = lower_extension(path) == ".glb";
   // Vertices no level uses are left out (io/used_vertices.h).
   std::vector<const std::vector<Triangle>*> lists;

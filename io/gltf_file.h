@@ -26,6 +26,11 @@ namespace scan2lod {
 struct GltfOptions {
   bool quantize = true;        // KHR_mesh_quantization; false: 32-bit floats
   std::string generator;       // asset.generator, e.g. "scan2lod 0.1.0"
+  // The point of the file's frame the positions are relative to (file frame =
+  // origin + position, io/mesh_file.h): every level's node is translated by
+  // it, a double in the JSON, while the float positions stay local and keep
+  // their precision. Zero writes no translation beyond the quantization's.
+  Vec3d origin = Vec3d::Zero();
 };
 
 // One level of a chain: triangles into the shared vertices, its name, and the

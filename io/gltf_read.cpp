@@ -1,6 +1,7 @@
 #include "io/gltf_read.h"
 
 #include "core/error.h"
+#include "io/local_origin.h"
 
 // As in gltf_file.cpp: Debian's shared libtinygltf holds the implementation;
 // images are never decoded here, so stb is not needed.
@@ -430,10 +431,11 @@ void add_triangles(const std::string& path, const AccessorReader& accessors, con
   }
 }
 
-// Appends the group's used vertices, in the world frame, and its triangles.
+// Appends the group's used vertices, in the world frame, and its triangles;
+// with `exact`, the positions in double there too.
 void append_group(const std::string& path, const AccessorReader& accessors, const VertexGroup& group,
                   const Eigen::Affine3d& world, const std::string& where, TriangleMesh* mesh, bool* all_normals,
-                  bool* all_colors) {
+                  bool* all_colors, std::vector<Vec3d>* exact) {
   int components = 0;
   const std::vector<float> positions = accessors.read<float>(group.position, kPositionRule, where, &components);
   std::vector<float> normals, colors;
@@ -456,12 +458,15 @@ void append_group(const std::string& path, const AccessorReader& accessors, cons
 
   const Eigen::Matrix3d normal_matrix = world.linear().inverse().transpose();
   mesh->positions.resize(next);
+  if (exact) exact->resize(next);
   mesh->normals.resize(next, Vec3f::Zero());
   mesh->colors.resize(next, Rgb{0, 0, 0});
   for (std::size_t v = 0; v < count; ++v) {
     if (remap[v] < 0) continue;
     const std::size_t out = std::size_t(remap[v]);
-    mesh->positions[out] = (world * Vec3d(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2])).cast<float>();
+    const Vec3d p = world * Vec3d(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+    mesh->positions[out] = p.cast<float>();
+    if (exact) (*exact)[out] = p;
     if (!normals.empty()) {
       const Vec3d n = normal_matrix * Vec3d(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
       const double length = n.norm();
@@ -486,9 +491,8 @@ bool is_triangle_mode(int mode) {
   return mode == TINYGLTF_MODE_TRIANGLES || mode == TINYGLTF_MODE_TRIANGLE_STRIP || mode == TINYGLTF_MODE_TRIANGLE_FAN;
 }
 
-}  // namespace
-
-TriangleMesh read_gltf(const std::string& path) {
+// The scene's mesh; with `exact`, its positions in double as well.
+TriangleMesh read_scene(const std::string& path, std::vector<Vec3d>* exact) {
   const tinygltf::Model model = load_model(path);
   check_required_extensions(path, model);
   const AccessorReader accessors(path, model);
@@ -518,13 +522,25 @@ TriangleMesh read_gltf(const std::string& path) {
       add_triangles(path, accessors, primitive, where, &groups[it->second]);
     }
     for (const VertexGroup& group : groups)
-      append_group(path, accessors, group, instance.world, mesh_name, &mesh, &all_normals, &all_colors);
+      append_group(path, accessors, group, instance.world, mesh_name, &mesh, &all_normals, &all_colors, exact);
   }
   if (mesh.triangles.empty())
     throw InputError(path, skipped ? "has no triangles: its scene draws only points or lines"
                                    : "has no triangles: its scene holds no mesh");
   if (!all_normals) mesh.normals.clear();
   if (!all_colors) mesh.colors.clear();
+  return mesh;
+}
+
+}  // namespace
+
+TriangleMesh read_gltf(const std::string& path) { return read_scene(path, nullptr); }
+
+TriangleMesh read_gltf(const std::string& path, Vec3d* origin) {
+  std::vector<Vec3d> exact;
+  TriangleMesh mesh = read_scene(path, &exact);
+  *origin = local_origin(exact);
+  if (*origin != Vec3d::Zero()) mesh.positions = positions_about(exact, *origin);
   return mesh;
 }
 

@@ -39,4 +39,11 @@ namespace scan2lod {
 // Thread-safe.
 TriangleMesh read_gltf(const std::string& path);
 
+// The same about a local origin (file frame = *origin + position, summed in
+// double; io/local_origin.h chooses it): the node transforms are applied in
+// double, so that a mesh placed by a large translation (a georeferenced one,
+// io/gltf_file.h) keeps its floats' precision. *origin is zero, and the mesh
+// the one above, when floats hold the scene's coordinates.
+TriangleMesh read_gltf(const std::string& path, Vec3d* origin);
+
 }  // namespace scan2lod

@@ -2,8 +2,10 @@
 
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/double_positions.h"
 #include "io/gltf_file.h"
 #include "io/gltf_read.h"
+#include "io/local_origin.h"
 #include "io/obj_writer.h"
 #include "io/used_vertices.h"
 
@@ -23,6 +25,7 @@
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
 #include <vtkCommand.h>
+#include <vtkDoubleArray.h>
 #include <vtkExecutive.h>
 #include <vtkFloatArray.h>
 #include <vtkPointData.h>
@@ -544,7 +547,9 @@ bool next_number(std::string_view& text, T& value) {
   return true;
 }
 
-TriangleMesh read_obj(const std::string& path) {
+// With `exact`, the positions in double as well (the floats are parsed from
+// the text too, so that they are what read_mesh(path) gives, bit for bit).
+TriangleMesh read_obj(const std::string& path, std::vector<Vec3d>* exact) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open the file for reading");
   TriangleMesh mesh;
@@ -567,8 +572,16 @@ TriangleMesh read_obj(const std::string& path) {
     text.remove_prefix(key_end == std::string_view::npos ? text.size() : key_end);
     if (key == "v") {
       Vec3f p;
+      const std::string_view coordinates = text;
       if (!next_number(text, p.x()) || !next_number(text, p.y()) || !next_number(text, p.z()))
         throw fail("expected 'v X Y Z'");
+      if (exact) {
+        Vec3d q;
+        std::string_view again = coordinates;
+        if (!next_number(again, q.x()) || !next_number(again, q.y()) || !next_number(again, q.z()))
+          throw fail("expected 'v X Y Z'");
+        exact->push_back(q);
+      }
       Vec3f rgb;
       const bool has_rgb =
           next_number(text, rgb.x()) && next_number(text, rgb.y()) && next_number(text, rgb.z());
@@ -758,7 +771,8 @@ void check_vtp_counts(const std::string& path, vtkXMLDataElement* root) {
   walk(root, "", Counts{});
 }
 
-TriangleMesh read_vtp(const std::string& path) {
+// With `exact`, the points in double as well (VTK hands them over as doubles).
+TriangleMesh read_vtp(const std::string& path, std::vector<Vec3d>* exact) {
   VtkErrorCatcher errors;  // outlives the reader that reports to it
   vtkNew<vtkXMLPolyDataReader> reader;
   if (!reader->CanReadFile(path.c_str()))
@@ -789,10 +803,12 @@ TriangleMesh read_vtp(const std::string& path) {
   TriangleMesh mesh;
   const vtkIdType n = poly->GetNumberOfPoints();
   mesh.positions.resize(std::size_t(n));
+  if (exact) exact->resize(std::size_t(n));
   for (vtkIdType i = 0; i < n; ++i) {
     double p[3];
     poly->GetPoint(i, p);
     mesh.positions[std::size_t(i)] = Vec3f(float(p[0]), float(p[1]), float(p[2]));
+    if (exact) (*exact)[std::size_t(i)] = Vec3d(p[0], p[1], p[2]);
   }
   auto add_cells = [&](vtkCellArray* cells, bool strip) {
     if (!cells) return;
@@ -850,11 +866,15 @@ TriangleMesh read_vtp(const std::string& path) {
 
 class FlatExporter : public omio::BaseExporter {
  public:
-  explicit FlatExporter(const TriangleMesh& mesh) : m_(mesh) {}
+  // Positions go out as origin + position, rounded to floats (STL: write_mesh
+  // has checked that floats hold them); zero writes the floats as they are.
+  FlatExporter(const TriangleMesh& mesh, const Vec3d& origin) : m_(mesh), origin_(origin) {}
 
   OpenMesh::Vec3f point(OpenMesh::VertexHandle vh) const override {
     const Vec3f& p = m_.positions[std::size_t(vh.idx())];
-    return {p.x(), p.y(), p.z()};
+    if (origin_ == Vec3d::Zero()) return {p.x(), p.y(), p.z()};
+    const Vec3f q = (origin_ + p.cast<double>()).cast<float>();
+    return {q.x(), q.y(), q.z()};
   }
   OpenMesh::Vec3d pointd(OpenMesh::VertexHandle vh) const override {
     return OpenMesh::vector_cast<OpenMesh::Vec3d>(point(vh));
@@ -910,6 +930,7 @@ class FlatExporter : public omio::BaseExporter {
   }
   unsigned int get_face_texcoords(std::vector<OpenMesh::Vec2f>&) const override { return 0; }
   OpenMesh::Vec3f normal(OpenMesh::FaceHandle fh) const override {
+    // Local positions: a facet's normal does not depend on where it lies.
     const Triangle& t = m_.triangles[std::size_t(fh.idx())];
     const Vec3f& a = m_.positions[t[0]];
     Vec3f n = (m_.positions[t[1]] - a).cross(m_.positions[t[2]] - a);
@@ -953,6 +974,7 @@ class FlatExporter : public omio::BaseExporter {
 
  private:
   const TriangleMesh& m_;
+  const Vec3d origin_;
   OpenMesh::BaseKernel no_properties_;
 };
 
@@ -972,8 +994,8 @@ void check_consistent(const std::string& path, const TriangleMesh& mesh) {
 }
 
 void write_with_openmesh(const std::string& tmp, const std::string& final_path,
-                         const std::string& ext, const TriangleMesh& mesh) {
-  FlatExporter exporter(mesh);
+                         const std::string& ext, const TriangleMesh& mesh, const Vec3d& origin) {
+  FlatExporter exporter(mesh, origin);
   omio::Options opt = omio::Options::Default;
   const bool has_n = !mesh.normals.empty(), has_c = !mesh.colors.empty();
   const omio::BaseWriter* writer = nullptr;
@@ -1006,14 +1028,25 @@ void write_with_openmesh(const std::string& tmp, const std::string& final_path,
     throw InputError(final_path, "writing " + ext.substr(1) + " failed (disk full?)");
 }
 
-void write_vtp(const std::string& tmp, const std::string& final_path, const TriangleMesh& mesh) {
+void write_vtp(const std::string& tmp, const std::string& final_path, const TriangleMesh& mesh,
+               const Vec3d& origin) {
   const vtkIdType n = vtkIdType(mesh.positions.size());
-  vtkNew<vtkFloatArray> coords;
-  coords->SetNumberOfComponents(3);
-  coords->SetNumberOfTuples(n);
-  if (n) std::memcpy(coords->GetPointer(0), mesh.positions.data(), std::size_t(n) * sizeof(Vec3f));
   vtkNew<vtkPoints> points;
-  points->SetData(coords);
+  if (origin == Vec3d::Zero()) {
+    vtkNew<vtkFloatArray> coords;
+    coords->SetNumberOfComponents(3);
+    coords->SetNumberOfTuples(n);
+    if (n) std::memcpy(coords->GetPointer(0), mesh.positions.data(), std::size_t(n) * sizeof(Vec3f));
+    points->SetData(coords);
+  } else {  // Float64 points in the file's frame
+    vtkNew<vtkDoubleArray> coords;
+    coords->SetNumberOfComponents(3);
+    coords->SetNumberOfTuples(n);
+    double* out = coords->GetPointer(0);
+    for (vtkIdType i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) out[3 * i + k] = origin[k] + double(mesh.positions[std::size_t(i)][k]);
+    points->SetData(coords);
+  }
 
   vtkNew<vtkTypeInt32Array> connectivity;
   connectivity->SetNumberOfValues(vtkIdType(mesh.triangles.size() * 3));
@@ -1059,28 +1092,59 @@ void write_vtp(const std::string& tmp, const std::string& final_path, const Tria
     throw InputError(final_path, "writing vtp failed: " + first_line(errors.message()));
 }
 
+// STL holds floats only: refuses a mesh within the box [low, high] (local)
+// about `origin` when floats do not hold that box in the file's frame
+// (io/local_origin.h), naming the formats that keep it.
+void check_stl_holds(const std::string& path, const Vec3d& origin, const Vec3d& low, const Vec3d& high) {
+  if (origin == Vec3d::Zero() || floats_hold(origin + low, origin + high)) return;
+  char what[512];
+  std::snprintf(what, sizeof what,
+                "cannot write STL in the file's frame: STL holds 32-bit floats only, which there (origin "
+                "%.17g, %.17g, %.17g) would move vertices by up to %.3g, more than a millionth of the mesh's "
+                "size; write .ply, .obj, .off, .vtp, .glb or .gltf, which keep it",
+                origin.x(), origin.y(), origin.z(), float_rounding(origin + low, origin + high));
+  throw InputError(path, what);
+}
+
 const char* const kFormats = ".ply, .obj, .off, .stl, .vtp, .glb or .gltf";
 const char* const kOutputFormats = ".ply, .obj, .off, .stl, .vtp, .glb or .gltf";
 
-}  // namespace
-
-TriangleMesh read_mesh(const std::string& path) {
+// The mesh `path` holds: as floats in the file's frame without `origin`, or
+// about the local origin it sets (read_mesh with an origin, io/mesh_file.h).
+TriangleMesh read_any(const std::string& path, Vec3d* origin) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "file not found");
   if (fs::is_directory(path, ec)) throw InputError(path, "is a folder, expected a mesh file");
   const std::string ext = lower_extension(path);
+  // Positions in double where the file holds more than floats; left empty
+  // where the floats are what the file holds.
+  std::vector<Vec3d> exact;
+  std::vector<Vec3d>* want = origin ? &exact : nullptr;
   TriangleMesh mesh;
-  if (ext == ".ply" || ext == ".off" || ext == ".stl")
+  if (ext == ".ply" || ext == ".off" || ext == ".stl") {
     mesh = read_with_openmesh(path, ext);
-  else if (ext == ".obj")
-    mesh = read_obj(path);
-  else if (ext == ".vtp")
-    mesh = read_vtp(path);
-  else if (is_gltf_path(path))
-    mesh = read_gltf(path);
-  else
+    if (want && ext == ".ply") exact = read_ply_double_positions(path);
+    if (want && ext == ".off") exact = read_off_double_positions(path, mesh.positions.size());
+  } else if (ext == ".obj") {
+    mesh = read_obj(path, want);
+  } else if (ext == ".vtp") {
+    mesh = read_vtp(path, want);
+  } else if (is_gltf_path(path)) {
+    return origin ? read_gltf(path, origin) : read_gltf(path);  // node transforms in double there
+  } else {
     throw InputError(path, "unknown mesh extension '" + ext + "', expected " + kFormats);
+  }
+  if (!origin) return mesh;
+  if (!exact.empty() && exact.size() != mesh.positions.size())
+    throw InputError(path, "holds " + std::to_string(exact.size()) + " vertex positions in double for " +
+                               std::to_string(mesh.positions.size()) + " vertices");
+  *origin = local_origin(exact);
+  if (*origin != Vec3d::Zero()) mesh.positions = positions_about(exact, *origin);
+  return mesh;
+}
 
+// What every mesh read must have.
+void check_read(const std::string& path, const TriangleMesh& mesh) {
   if (mesh.positions.empty()) throw InputError(path, "has no vertices");
   if (mesh.triangles.empty())
     throw InputError(path, "has no faces: expected a triangle mesh, not a point cloud");
@@ -1088,6 +1152,19 @@ TriangleMesh read_mesh(const std::string& path) {
     if (!mesh.positions[i].allFinite())
       throw InputError(path, "vertex " + std::to_string(i) + " has a coordinate that is not a "
                              "finite number");
+}
+
+}  // namespace
+
+TriangleMesh read_mesh(const std::string& path) {
+  TriangleMesh mesh = read_any(path, nullptr);
+  check_read(path, mesh);
+  return mesh;
+}
+
+TriangleMesh read_mesh(const std::string& path, Vec3d* origin) {
+  TriangleMesh mesh = read_any(path, origin);
+  check_read(path, mesh);
   return mesh;
 }
 
@@ -1098,6 +1175,13 @@ void check_mesh_output(const std::string& path) {
   check_output_path(path);
 }
 
+void check_mesh_output(const std::string& path, const Vec3d& origin, const Aabb& bounds) {
+  check_mesh_output(path);
+  if (!origin.allFinite()) throw InputError(path, "cannot write: the origin is not a finite point");
+  if (lower_extension(path) == ".stl" && !bounds.empty())
+    check_stl_holds(path, origin, bounds.min.cast<double>(), bounds.max.cast<double>());
+}
+
 std::size_t write_mesh(const std::string& path, const TriangleMesh& mesh, const MeshWriteOptions& options) {
   check_mesh_output(path);
   const std::string ext = lower_extension(path);
@@ -1106,20 +1190,32 @@ std::size_t write_mesh(const std::string& path, const TriangleMesh& mesh, const 
   std::optional<UsedVertices> used = drop_unused_vertices(mesh, {&mesh.triangles});
   if (used) used->vertices.triangles = std::move(used->lists[0]);
   const TriangleMesh& out = used ? used->vertices : mesh;
+  const Vec3d& origin = options.origin;
+  if (!origin.allFinite()) throw InputError(path, "cannot write: the origin is not a finite point");
   if (is_gltf_path(path)) {
     GltfOptions gltf;
     gltf.quantize = options.quantize;
     gltf.generator = options.generator;
+    gltf.origin = origin;
     write_gltf(path, out, gltf);
     return out.positions.size();
   }
+  const bool framed = origin != Vec3d::Zero();
+  if (framed && ext == ".stl") {
+    const Aabb box = bounds(out.positions);
+    check_stl_holds(path, origin, box.min.cast<double>(), box.max.cast<double>());
+  }
   write_atomically(path, [&](const std::string& tmp) {
     if (ext == ".vtp")
-      write_vtp(tmp, path, out);
+      write_vtp(tmp, path, out, origin);
     else if (ext == ".obj")
-      write_obj(tmp, path, out);
+      write_obj(tmp, path, out, origin);
+    else if (framed && ext == ".ply")
+      write_ply_in_frame(tmp, path, out, origin);
+    else if (framed && ext == ".off")
+      write_off_in_frame(tmp, path, out, origin);
     else
-      write_with_openmesh(tmp, path, ext, out);
+      write_with_openmesh(tmp, path, ext, out, origin);
   });
   return out.positions.size();
 }

@@ -40,6 +40,12 @@ struct OctreeLod {
 
 struct LodModel {
   VertexArray vertices;
+  // The point of the inputs' own frame that the vertices are relative to:
+  // input frame = origin + position, added in double (AcquisitionReport::
+  // origin). Zero but for georeferenced inputs (LAS), whose coordinates a
+  // float cannot hold; writers given it (MeshWriteOptions::origin) put levels
+  // back in the inputs' frame. Not the octree's grid origin (McOctree::grid).
+  Vec3d origin = Vec3d::Zero();
   std::optional<OctreeLod> octree;
   std::optional<ClusterHierarchy> clusters;
   // What the cluster hierarchy indexes: vertices [first, first + count).

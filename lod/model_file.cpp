@@ -84,6 +84,7 @@ std::uint64_t get_u64(const std::uint8_t* p) {
 // from format 4 on, the octree packed (lod/model_pack.h).
 struct Records {
   std::uint8_t grid[kGridRecordBytes] = {};
+  double origin[3] = {0, 0, 0};
   std::uint64_t pinned = 0;
   std::uint64_t cluster_info[3] = {0, 0, 0};
   PackedOctree packed;
@@ -142,6 +143,8 @@ const SectionSpec kSections[] = {
     {"POSN", Part::kVertices, true, [](LodModel& m, Records&) { return array(m.vertices.positions); }},
     {"NRML", Part::kVertices, true, [](LodModel& m, Records&) { return array(m.vertices.normals); }},
     {"COLR", Part::kVertices, true, [](LodModel& m, Records&) { return array(m.vertices.colors); }},
+    // 4.5, optional: older readers give levels about the origin.
+    {"ORGN", Part::kVertices, false, [](LodModel&, Records& r) { return record(r.origin, 24); }, kPacked},
     {"GRID", Part::kOctree, true, [](LodModel&, Records& r) { return record(r.grid, kGridRecordBytes); }},
     {"KEYS", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).keys); }, 2, kUnpacked},
     {"LEVL", Part::kOctree, true, [](LodModel& m, Records&) { return array(nodes_of(m).levels); }, 2, kUnpacked},
@@ -193,6 +196,7 @@ bool has_part(const LodModel& model, Part part) {
 // The records as the writer of format `major` lays them out.
 Records records_of(const LodModel& model, std::uint32_t major) {
   Records r;
+  for (int i = 0; i < 3; ++i) r.origin[i] = model.origin[i];
   if (model.octree && major >= kPacked) r.packed = pack_octree(model.octree->tree);
   if (model.octree) {
     const McOctree& t = model.octree->tree;
@@ -259,6 +263,8 @@ void emit_model(const LodModel& model, std::uint32_t major,
     if (!has_part(model, spec.part) || !spec.in(major)) continue;
     // A hierarchy made by hand, without pages: the reader derives them.
     if (std::strcmp(spec.tag, "PAGE") == 0 && model.clusters->pages.empty()) continue;
+    // A model in its inputs' own frame: files stay as they were.
+    if (std::strcmp(spec.tag, "ORGN") == 0 && model.origin == Vec3d::Zero()) continue;
     const Payload p = spec.payload(readable, records);
     sections.push_back({fourcc(spec.tag), p.element_size, p.count, p.data, spec.required ? kRequired : 0});
     // A hierarchy built in blocks may hold its triangles on disk.
@@ -418,6 +424,7 @@ class Decoder {
   void read_part(Part part, LodModel* model);
   void read_grid(McOctree* t) const;
   void read_pinned(LodArray* lod);
+  void read_origin(LodModel* model) const;
   void check_vertices(const LodModel& model) const;
   void decode_clusters(LodModel* model);
   void check_pages(ClusterHierarchy& h) const;
@@ -564,6 +571,15 @@ void Decoder::read_pinned(LodArray* lod) {
     fail("section 'PINC' has elements of " + bytes_text(s.element_size) + ", expected 8");
   if (s.count != 1) fail("section 'PINC' must hold one count, not " + std::to_string(s.count));
   lod->pinned = std::size_t(std::min<std::uint64_t>(get_u64(data_ + s.offset), std::numeric_limits<std::size_t>::max()));
+}
+
+// Optional (added in 4.5): without it the vertices are in the inputs' frame.
+void Decoder::read_origin(LodModel* model) const {
+  if (!by_tag_.count(fourcc("ORGN"))) return;
+  const Section& s = section("ORGN");
+  if (s.count != 1 || s.element_size != 24) bad("section 'ORGN' must be one record of 24 bytes");
+  for (int i = 0; i < 3; ++i) std::memcpy(&model->origin[i], data_ + s.offset + 8 * i, 8);
+  if (!model->origin.allFinite()) bad("section 'ORGN': the origin must be a finite point");
 }
 
 void Decoder::check_vertices(const LodModel& model) const {
@@ -864,6 +880,7 @@ LodModel Decoder::decode() {
   index_sections();
   LodModel model;
   read_part(Part::kVertices, &model);
+  read_origin(&model);
   vertices_ = model.vertices.size();
   check_vertices(model);
   const bool has_octree = major_ == 2 || by_tag_.count(fourcc("GRID"));

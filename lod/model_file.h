@@ -93,6 +93,12 @@
 //         clusters whose triangles are one run of CTRI (64 KiB at most unless
 //         one cluster is larger), so that a viewer reads only the pages whose
 //         sphere it sees and whose error interval holds its threshold
+// Added in 4.5, optional, written only when the origin is not zero (a 4.4
+// reader skips it and gives levels about the origin, i.e. shifted out of the
+// inputs' frame; a 4.5 reader of an older file takes zero):
+//   ORGN  1 record of 24 bytes: f64 origin[3], LodModel::origin, the point of
+//         the inputs' frame that the vertices are relative to (georeferenced
+//         inputs: input frame = origin + POSN, added in double)
 // Every section is listed once, in kSections (model_file.cpp), with the
 // formats that hold it: the writer and the reader both walk that table. A new
 // array is a new row there (and, if it must agree with others, a check in the
@@ -111,7 +117,7 @@
 namespace scan2lod {
 
 constexpr std::uint32_t kModelFormatMajor = 4;
-constexpr std::uint32_t kModelFormatMinor = 4;
+constexpr std::uint32_t kModelFormatMinor = 5;
 
 // Writes `model` to `path` (extension .mco) through write_atomically: a
 // failure or a signal leaves nothing under `path`.

@@ -335,6 +335,7 @@ LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions&
                                      &progress);
   report.acquisition = acquisition;
   report.seconds_read = read;
+  model.origin = acquisition.origin;  // a LAS input's local origin: outputs go back to its frame
   return model;
 }
 

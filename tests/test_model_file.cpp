@@ -830,6 +830,49 @@ TEST(ModelFile, CraftedClusterHierarchiesAreRejectedBeforeExtraction) {
       << error_of(narrow.data(), narrow.size());
 }
 
+// A model of georeferenced inputs keeps the point of their frame its
+// vertices are relative to (4.5, ORGN), bit for bit; a model without one
+// writes the bytes it wrote before (no ORGN), and a 4.4 file reads as zero.
+TEST(ModelFile, TheInputsOriginRoundTripsAndIsWrittenOnlyWhenSet) {
+  LodModel m = bunny64();
+  EXPECT_EQ(m.origin, Vec3d::Zero());
+  const std::vector<RawSection> plain = split(bunny64_bytes());
+  for (const RawSection& s : plain) EXPECT_NE(s.tag, tag("ORGN"));
+
+  m.origin = Vec3d(500123.456, 5001234.5678901, 301.25);  // UTM east, north, height
+  const std::vector<std::uint8_t> bytes = encode_model(m);
+  std::vector<RawSection> sections = split(bytes);
+  ASSERT_EQ(sections.size(), plain.size() + 1);
+  const RawSection& orgn = sections[index_of(sections, tag("ORGN"))];
+  EXPECT_EQ(orgn.flags, 0u) << "optional: a 4.4 reader skips it";
+  EXPECT_EQ(orgn.element_size, 24u);
+  EXPECT_EQ(orgn.count, 1u);
+  const LodModel l = decode_model(bytes.data(), bytes.size(), "utm.mco");
+  EXPECT_EQ(l.origin, m.origin);  // every bit of the doubles
+  EXPECT_EQ(l.vertices.positions, m.vertices.positions);
+  EXPECT_EQ(level(l, LodStructure::kClusters, LevelRequest::at_percent(25)),
+            level(m, LodStructure::kClusters, LevelRequest::at_percent(25)));
+  // Without it (a 4.4 writer) the origin is zero; the rest is the same model.
+  sections.erase(sections.begin() + std::ptrdiff_t(index_of(sections, tag("ORGN"))));
+  const std::vector<std::uint8_t> old = join(sections, kModelFormatMajor, 4);
+  EXPECT_EQ(decode_model(old.data(), old.size(), "old.mco").origin, Vec3d::Zero());
+  // A crafted origin is refused by name.
+  sections = split(bytes);
+  RawSection& crafted = sections[index_of(sections, tag("ORGN"))];
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::memcpy(crafted.payload.data() + 8, &nan, 8);
+  std::vector<std::uint8_t> bad = join(sections, kModelFormatMajor, kModelFormatMinor);
+  EXPECT_NE(error_of(bad.data(), bad.size()).find("section 'ORGN': the origin must be a finite point"),
+            std::string::npos)
+      << error_of(bad.data(), bad.size());
+  crafted.payload.resize(16);
+  crafted.element_size = 16;
+  bad = join(sections, kModelFormatMajor, kModelFormatMinor);
+  EXPECT_NE(error_of(bad.data(), bad.size()).find("section 'ORGN' must be one record of 24 bytes"),
+            std::string::npos)
+      << error_of(bad.data(), bad.size());
+}
+
 TEST(ModelFile, Format5IsRefusedAsNewer) {
   static_assert(kModelFormatMajor == 4, "this reader writes format 4");
   const std::vector<std::uint8_t> five = with_major(bunny64_bytes(), 5);

@@ -1,0 +1,53 @@
+// Text output for the ASCII mesh writers (OBJ, OFF in double): numbers and
+// text appended to a buffer flushed in large blocks, since formatting, not
+// the disk, is what an ASCII writer spends its time on.
+#pragma once
+
+#include <charconv>
+#include <cstdio>
+#include <string>
+
+namespace scan2lod {
+
+class LineWriter {
+ public:
+  explicit LineWriter(std::FILE* f) : f_(f) { buffer_.reserve(kBlock + 256); }
+  ~LineWriter() { flush(); }
+  void text(const char* s) {
+    while (*s) buffer_.push_back(*s++);
+  }
+  // 9 significant digits: every float reads back exactly.
+  void number(float v) {
+    char tmp[32];
+    const auto r = std::to_chars(tmp, tmp + sizeof tmp, v, std::chars_format::general, 9);
+    buffer_.append(tmp, r.ptr);
+  }
+  // The shortest text that reads back as exactly `v` (at most 17 digits).
+  void number(double v) {
+    char tmp[32];
+    const auto r = std::to_chars(tmp, tmp + sizeof tmp, v);
+    buffer_.append(tmp, r.ptr);
+  }
+  void number(long long v) {
+    char tmp[24];
+    const auto r = std::to_chars(tmp, tmp + sizeof tmp, v);
+    buffer_.append(tmp, r.ptr);
+  }
+  void end_line() {
+    buffer_.push_back('\n');
+    if (buffer_.size() >= kBlock) flush();
+  }
+  void flush() {
+    if (!buffer_.empty() && std::fwrite(buffer_.data(), 1, buffer_.size(), f_) != buffer_.size()) failed_ = true;
+    buffer_.clear();
+  }
+  bool failed() const { return failed_; }
+
+ private:
+  static constexpr std::size_t kBlock = 1 << 20;
+  std::FILE* f_;
+  std::string buffer_;
+  bool failed_ = false;
+};
+
+}  // namespace scan2lod
