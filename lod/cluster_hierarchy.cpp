@@ -640,7 +640,19 @@ std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vect
     const auto [begin, end] = todo.back();
     todo.pop_back();
     if (end - begin <= block) {
-      std::sort(triangles->begin() + std::ptrdiff_t(begin), triangles->begin() + std::ptrdiff_t(end), before(0));
+      // Sorted by `before(0)` with the centroids taken once: the comparator
+      // alone loads six vertices from all over the mesh.
+      std::vector<std::pair<Vec3f, std::uint32_t>> keys(end - begin);
+      for (std::size_t i = begin; i < end; ++i) keys[i - begin] = {centroid((*triangles)[i]), std::uint32_t(i)};
+      const auto tied = before(0);
+      std::sort(keys.begin(), keys.end(), [&](const auto& a, const auto& b) {
+        for (int k = 0; k < 3; ++k)
+          if (a.first[k] != b.first[k]) return a.first[k] < b.first[k];
+        return tied((*triangles)[a.second], (*triangles)[b.second]);
+      });
+      std::vector<Triangle> sorted(end - begin);
+      for (std::size_t i = 0; i < keys.size(); ++i) sorted[i] = (*triangles)[keys[i].second];
+      std::copy(sorted.begin(), sorted.end(), triangles->begin() + std::ptrdiff_t(begin));
       starts.push_back(begin);
       continue;
     }
