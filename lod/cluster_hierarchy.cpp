@@ -610,7 +610,7 @@ void lock_block_borders(Shared& s, Each each) {
 //
 // The blocks and the order inside each depend on the triangles' positions
 // alone, not on the order they came in: the median by a total order, each
-// block sorted by it at the end. A surface welded from bricks numbers its
+// block sorted by it at the end, across its own longest side. A surface welded from bricks numbers its
 // triangles otherwise than one made in core; the same blocks make it the
 // same hierarchy.
 std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vector<Triangle>* triangles, std::size_t block) {
@@ -640,14 +640,23 @@ std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vect
     const auto [begin, end] = todo.back();
     todo.pop_back();
     if (end - begin <= block) {
-      // Sorted by `before(0)` with the centroids taken once: the comparator
-      // alone loads six vertices from all over the mesh.
+      // Sorted across the block's longest side, so that its halves (a part a
+      // core, in the first pass) are a KD split too; the centroids are taken
+      // once, as the comparator alone loads six vertices from all over.
       std::vector<std::pair<Vec3f, std::uint32_t>> keys(end - begin);
-      for (std::size_t i = begin; i < end; ++i) keys[i - begin] = {centroid((*triangles)[i]), std::uint32_t(i)};
-      const auto tied = before(0);
+      Aabb box;
+      for (std::size_t i = begin; i < end; ++i) {
+        keys[i - begin] = {centroid((*triangles)[i]), std::uint32_t(i)};
+        box.extend(keys[i - begin].first);
+      }
+      int axis = 0;
+      box.extent().maxCoeff(&axis);
+      const auto tied = before(axis);
       std::sort(keys.begin(), keys.end(), [&](const auto& a, const auto& b) {
-        for (int k = 0; k < 3; ++k)
-          if (a.first[k] != b.first[k]) return a.first[k] < b.first[k];
+        for (int k = 0; k < 3; ++k) {
+          const int i = (axis + k) % 3;
+          if (a.first[i] != b.first[i]) return a.first[i] < b.first[i];
+        }
         return tied((*triangles)[a.second], (*triangles)[b.second]);
       });
       std::vector<Triangle> sorted(end - begin);
@@ -703,14 +712,13 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std
       // took a second on one core, the rest waiting).
       SplitGroup full;
       {
-        std::vector<Triangle> own(triangles.begin() + std::ptrdiff_t(starts[b]),
-                                  triangles.begin() + std::ptrdiff_t(starts[b + 1]));
-        const std::size_t part = s.threads > 1 && own.size() >= 2 * kSmallestRun
-                                     ? (own.size() + std::size_t(s.threads) - 1) / std::size_t(s.threads)
-                                     : own.size();
-        const std::vector<std::size_t> runs = kd_blocks(s.positions, &own, part);
+        const std::size_t size = starts[b + 1] - starts[b];
+        const std::size_t parts = s.threads > 1 && size >= 2 * kSmallestRun ? std::size_t(s.threads) : 1;
+        std::vector<std::size_t> runs(parts + 1);
+        for (std::size_t p = 0; p <= parts; ++p) runs[p] = p * size / parts;
+        const Triangle* own = triangles.data() + starts[b];
         full = split_runs(s.positions, runs, options.cluster_triangles, s.threads,
-                          [&](std::size_t i) -> const Triangle& { return own[i]; });
+                          [own](std::size_t i) -> const Triangle& { return own[i]; });
       }
       Block one;
       append_clusters(full, -1, 0, &one.h, &one.active);
