@@ -25,31 +25,6 @@ File create(const std::string& file, const std::string& name) {
   return f;
 }
 
-// Binary records gathered in a buffer and written in large blocks.
-class RecordWriter {
- public:
-  explicit RecordWriter(std::FILE* f) : f_(f) { buffer_.reserve(kBlock + 64); }
-  template <class T>
-  void put(const T& value) {
-    const char* bytes = reinterpret_cast<const char*>(&value);
-    buffer_.insert(buffer_.end(), bytes, bytes + sizeof value);
-  }
-  void end_record() {
-    if (buffer_.size() >= kBlock) flush();
-  }
-  void flush() {
-    if (!buffer_.empty() && std::fwrite(buffer_.data(), 1, buffer_.size(), f_) != buffer_.size()) failed_ = true;
-    buffer_.clear();
-  }
-  bool failed() const { return failed_; }
-
- private:
-  static constexpr std::size_t kBlock = 1 << 20;
-  std::FILE* f_;
-  std::vector<char> buffer_;
-  bool failed_ = false;
-};
-
 // ---------------------------------------------------------------------------
 // Reading a PLY's positions: its header, as far as the vertices need it.
 
@@ -191,7 +166,7 @@ void write_ply_in_frame(const std::string& file, const std::string& name, const 
             "\nproperty list uchar int vertex_indices\nend_header\n";
   bool failed = std::fwrite(header.data(), 1, header.size(), f.get()) != header.size();
   {
-    RecordWriter out(f.get());
+    LineWriter out(f.get());
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
       for (int k = 0; k < 3; ++k) out.put(origin[k] + double(mesh.positions[i][k]));
       if (has_n) out.put(mesh.normals[i]);

@@ -1,6 +1,7 @@
-// Text output for the ASCII mesh writers (OBJ, OFF in double): numbers and
-// text appended to a buffer flushed in large blocks, since formatting, not
-// the disk, is what an ASCII writer spends its time on.
+// Output for the mesh writers of our own (OBJ, OFF and PLY in double):
+// numbers, text or binary records appended to a buffer flushed in large
+// blocks, since formatting, not the disk, is what an ASCII writer spends its
+// time on, and small writes are what a binary one would.
 #pragma once
 
 #include <charconv>
@@ -32,6 +33,14 @@ class LineWriter {
     char tmp[24];
     const auto r = std::to_chars(tmp, tmp + sizeof tmp, v);
     buffer_.append(tmp, r.ptr);
+  }
+  // The bytes of `value` as they lie in memory (little-endian records).
+  template <class T>
+  void put(const T& value) {
+    buffer_.append(reinterpret_cast<const char*>(&value), sizeof value);
+  }
+  void end_record() {
+    if (buffer_.size() >= kBlock) flush();
   }
   void end_line() {
     buffer_.push_back('\n');
