@@ -136,6 +136,40 @@ TEST(ReadBack, AnLodChainReadsAsItsFinestLevel) {
   EXPECT_LE(corner_distance(g, e.ply), 0.51f * e.step);
 }
 
+TEST(ReadBack, AMeshInputsFullDetailKeepsItsPositionsBitForBit) {
+  // A mesh given to build is its own full detail: extracted at 100 %, every
+  // position comes back with the bytes it had (a float round trip once moved
+  // them all by up to 8e-9).
+  const std::string zipper = std::string(SCAN2LOD_SHARED_DIR) + "/data/bunny/reconstruction/bun_zipper.ply";
+  const fs::path dir = scratch("mesh_input");
+  const CliRun built = run_cli("build " + zipper + " --structure clusters -q -o " + (dir / "z.mco").string());
+  ASSERT_EQ(built.status, 0) << built.output;
+  const CliRun extracted =
+      run_cli("extract " + (dir / "z.mco").string() + " --percent 100 -q -o " + (dir / "z.ply").string());
+  ASSERT_EQ(extracted.status, 0) << extracted.output;
+  const TriangleMesh in = read_mesh(zipper), out = read_mesh((dir / "z.ply").string());
+  // The bytes of the positions the triangles use (bun_zipper.ply has 1,113
+  // that none does, which are not written), as a set.
+  auto bytes = [](const TriangleMesh& m) {
+    std::vector<std::uint8_t> used(m.positions.size(), 0);
+    for (const Triangle& t : m.triangles)
+      for (std::int32_t v : t) used[std::size_t(v)] = 1;
+    std::vector<std::array<std::uint32_t, 3>> b;
+    for (std::size_t v = 0; v < m.positions.size(); ++v)
+      if (used[v]) {
+        std::array<std::uint32_t, 3> x;
+        std::memcpy(x.data(), m.positions[v].data(), sizeof x);
+        b.push_back(x);
+      }
+    std::sort(b.begin(), b.end());
+    return b;
+  };
+  ASSERT_EQ(out.triangles.size(), in.triangles.size());
+  const auto a = bytes(in), b = bytes(out);
+  ASSERT_EQ(b.size(), a.size());
+  EXPECT_EQ(std::mismatch(a.begin(), a.end(), b.begin()).first - a.begin(), std::ptrdiff_t(a.size()));
+}
+
 TEST(ReadBack, BuildAndReconstructTakeGltfInputs) {
   const Extracted& e = bunny_outputs();
   const fs::path dir = scratch("inputs");
