@@ -8,7 +8,6 @@
 #include "lod/triangle_spool.h"
 
 #include <meshoptimizer.h>
-#include <parallel/algorithm>
 
 #include <algorithm>
 #include <atomic>
@@ -42,7 +41,26 @@ struct Sphere {
 
 // Phase 1: one id per position (the smallest vertex index there), so that
 // split attributes do not split adjacency or locks.
-std::vector<std::int32_t> weld_positions(ArrayView<Vec3f> positions) {
+// Sorts [first, last) by `less`, a total order (so the result is the same on
+// any core count): on two threads when asked and worth it, halves sorted
+// apart and merged. Not __gnu_parallel::sort: its OpenMP workers spin for a
+// while after each sort, and the rounds call this hundreds of times between
+// their own threads' work (11-13 % of a bunny build's CPU time, spinning).
+template <class It, class Less>
+void sort_on_cores(It first, It last, int threads, Less less) {
+  const auto n = last - first;
+  if (threads < 2 || n < (1 << 16)) {
+    std::sort(first, last, less);
+    return;
+  }
+  const It middle = first + n / 2;
+  std::thread other([&] { std::sort(first, middle, less); });
+  std::sort(middle, last, less);
+  other.join();
+  std::inplace_merge(first, middle, last, less);
+}
+
+std::vector<std::int32_t> weld_positions(ArrayView<Vec3f> positions, int threads) {
   std::vector<std::int32_t> order(positions.size()), weld(positions.size());
   std::iota(order.begin(), order.end(), 0);
   auto less = [&](std::int32_t a, std::int32_t b) {
@@ -52,7 +70,7 @@ std::vector<std::int32_t> weld_positions(ArrayView<Vec3f> positions) {
     if (p.z() != q.z()) return p.z() < q.z();
     return a < b;
   };
-  __gnu_parallel::sort(order.begin(), order.end(), less);  // a total order: the same on any core count
+  sort_on_cores(order.begin(), order.end(), threads, less);
   for (std::size_t i = 0; i < order.size(); ++i) {
     const bool same = i > 0 && positions[std::size_t(order[i])] == positions[std::size_t(order[i - 1])];
     weld[std::size_t(order[i])] = same ? weld[std::size_t(order[i - 1])] : order[i];
@@ -276,7 +294,7 @@ void append_clusters(const SplitGroup& g, std::int32_t own_group, std::uint8_t l
 
 // Phase 3a: the active clusters as a graph, joined by the vertices they share.
 // `last`: -1 for every vertex, and so again on return.
-WeightedGraph cluster_graph(const ClusterHierarchy& h, const std::vector<std::int32_t>& active,
+WeightedGraph cluster_graph(const ClusterHierarchy& h, const std::vector<std::int32_t>& active, int threads,
                             const std::vector<std::int32_t>& weld, std::vector<std::int32_t>* last) {
   // Each vertex once per cluster that uses it (a vertex is in about six of
   // a cluster's triangles): a sixth of the entries to sort, which was most of
@@ -292,8 +310,8 @@ WeightedGraph cluster_graph(const ClusterHierarchy& h, const std::vector<std::in
       }
   }
   for (const auto& [w, i] : uses) (*last)[std::size_t(w)] = -1;
-  // Sorted on every core: values are their own keys, so the order is the same.
-  __gnu_parallel::sort(uses.begin(), uses.end());
+  // Values are their own keys: the same order on any core count.
+  sort_on_cores(uses.begin(), uses.end(), threads, std::less<>());
   std::vector<std::uint64_t> pairs;
   for (std::size_t i = 0; i < uses.size();) {
     std::size_t j = i;
@@ -306,7 +324,7 @@ WeightedGraph cluster_graph(const ClusterHierarchy& h, const std::vector<std::in
       }
     i = j;
   }
-  __gnu_parallel::sort(pairs.begin(), pairs.end());
+  sort_on_cores(pairs.begin(), pairs.end(), threads, std::less<>());
   WeightedGraph g;
   g.first.assign(active.size() + 1, 0);
   for (std::size_t i = 0; i < pairs.size();) {
@@ -463,7 +481,7 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
     int group_count = 1;
     std::vector<std::int32_t> group_of(active.size(), 0);
     if (active.size() > std::size_t(options.group_clusters))
-      group_of = partition_graph(cluster_graph(h, active, s.weld, &s.vertex_group), options.group_clusters, &group_count);
+      group_of = partition_graph(cluster_graph(h, active, s.threads, s.weld, &s.vertex_group), options.group_clusters, &group_count);
     std::vector<std::vector<std::int32_t>> members;
     members.resize(std::size_t(group_count));
     for (std::size_t i = 0; i < active.size(); ++i) members[std::size_t(group_of[i])].push_back(active[i]);
@@ -757,7 +775,7 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std
     std::iota(all.begin(), all.end(), 0);
     int parts = 1;
     const int per_block = int(std::max<std::size_t>(2, block * n / left));
-    const std::vector<std::int32_t> part = partition_graph(cluster_graph(carried.h, all, s.weld, &s.vertex_group), per_block, &parts);
+    const std::vector<std::int32_t> part = partition_graph(cluster_graph(carried.h, all, s.threads, s.weld, &s.vertex_group), per_block, &parts);
     std::vector<std::size_t> starts(std::size_t(parts) + 1, 0);
     for (std::int32_t p : part) ++starts[std::size_t(p) + 1];
     for (std::size_t b = 0; b < std::size_t(parts); ++b) starts[b + 1] += starts[b];
@@ -855,7 +873,7 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
   s.positions = JoinedView<Vec3f>(positions, &s.added_positions);
   s.options = &options;
   s.threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  s.weld = weld_positions(positions);
+  s.weld = weld_positions(positions, s.threads);
   const float diagonal = bounds(positions).diagonal();
   s.input.positions = s.positions;
   s.input.normals = JoinedView<Vec3f>(normals, &s.added_normals);
