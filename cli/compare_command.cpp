@@ -88,8 +88,14 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("--seed", args->options.seed, "Sampling seed")->capture_default_str();
   cmd->add_flag("--json", args->json, "Print one JSON object instead of a table");
   cmd->callback([args] {
-    const TriangleMesh a = read_mesh(args->a);
-    const TriangleMesh b = read_mesh(args->b);
+    // Georeferenced meshes (double PLY, OBJ text at UTM) are read about a
+    // local origin each; B is moved to A's, in double, so that the two are
+    // compared in one frame without float steps of a metre.
+    Vec3d origin_a, origin_b;
+    const TriangleMesh a = read_mesh(args->a, &origin_a);
+    TriangleMesh b = read_mesh(args->b, &origin_b);
+    if (origin_a != origin_b)
+      for (Vec3f& p : b.positions) p = ((origin_b - origin_a) + p.cast<double>()).cast<float>();
     SurfaceComparison c;
     try {
       c = compare_surfaces(a, b, args->options);

@@ -26,6 +26,7 @@
 #include <open3d/io/TriangleMeshIO.h>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdlib>
@@ -192,6 +193,31 @@ TEST(LasOutput, ReconstructWritesEveryFormatInTheFilesFrame) {
 // STL holds floats only: in the UTM frame they would move vertices by up to
 // 0.25 m, so it is refused, naming the formats that keep the frame, and
 // nothing is written. On a local grid (coordinates of a few km) floats hold it.
+TEST(LasOutput, CompareMeasuresGeoreferencedMeshesInTheirFrame) {
+  // A 10 m wall facing north at a UTM northing (floats step by 0.5 m
+  // there), and the same wall 1 mm further north: compare reads both in
+  // double and finds the millimetre.
+  TriangleMesh wall;
+  for (int i = 0; i <= 10; ++i)
+    for (int k = 0; k <= 10; ++k) wall.positions.push_back(Vec3f(float(i), 0.f, float(k)));
+  for (int i = 0; i < 10; ++i)
+    for (int k = 0; k < 10; ++k) {
+      const std::int32_t v = std::int32_t(11 * i + k);
+      wall.triangles.push_back({v, v + 11, v + 1});
+      wall.triangles.push_back({v + 1, v + 11, v + 12});
+    }
+  MeshWriteOptions near, far;
+  near.origin = Vec3d(501000, 5002000, 300);
+  far.origin = Vec3d(501000, 5002000.001, 300);
+  write_mesh(scratch("wall.ply").string(), wall, near);
+  write_mesh(scratch("wall_north.ply").string(), wall, far);
+  const CliRun r = run_cli("compare " + scratch("wall_north.ply").string() + " " + scratch("wall.ply").string() + " --json");
+  ASSERT_EQ(r.status, 0) << output_error(r);
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_NEAR(j.at("a_to_b").at("mean").get<double>(), 0.001, 1e-5);
+  EXPECT_NEAR(j.at("b_to_a").at("max").get<double>(), 0.001, 1e-5);
+}
+
 TEST(LasOutput, StlIsWrittenOnlyWhereFloatsHoldTheFilesFrame) {
   const fs::path refused = scratch("hill.stl");
   const CliRun r = run_cli("reconstruct " + utm_survey().path.string() + " -r 128 -q -o " + refused.string());
