@@ -269,7 +269,6 @@ bool is_data_line(std::string_view line) {
 TextColumns read_columns(const std::string& path, std::string_view text, std::size_t* at, std::size_t* number) {
   const char* p = text.data();
   const char* const end = text.data() + text.size();
-  bool first = true;
   for (*number = 1; p < end; ++*number) {
     const char* start = p;
     const std::string_view line = next_line(p, end);
@@ -277,11 +276,9 @@ TextColumns read_columns(const std::string& path, std::string_view text, std::si
     double v[10];
     const int count = parse_numbers(line, v, 10);
     if (count < 0) fail_at_line(path, *number, line, "expected numbers only");
-    // A .pts file starts with its point count.
-    if (first && count == 1 && v[0] >= 0 && v[0] == std::floor(v[0])) {
-      first = false;
-      continue;
-    }
+    // A .pts file starts with its point count; lines of a count alone
+    // before the first point are skipped, as releases before skipped them.
+    if (count == 1 && v[0] >= 0 && v[0] == std::floor(v[0])) continue;
     if (count != 3 && count != 4 && count != 6 && count != 7 && count != 9)
       fail_at_line(path, *number, line,
                    "expected 3 (x y z), 4 (x y z i), 6 (x y z nx ny nz, or x y z r g b), 7 (x y z i r g b) or "

@@ -146,6 +146,12 @@ TEST(PointCloudFiles, XyzAndPtsTextAreRead) {
   EXPECT_TRUE(c.normals.empty());
   ASSERT_EQ(c.colors.size(), 2u);
   EXPECT_EQ(c.colors[1], (Rgb{0, 255, 0}));
+  // Count lines alone before the first point (one per scan section) are
+  // skipped, as earlier releases skipped them.
+  spit(pts, "2\n2\n0 0 0 -120 255 0 0\n1 1 1 -100 0 255 0\n");
+  c = read_point_cloud_text(pts.string());
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.colors[1], (Rgb{0, 255, 0}));
   const fs::path rgb = scratch("rgb.xyz");
   spit(rgb, "0 0 0 200 10 10\n");
   c = read_point_cloud_text(rgb.string());
