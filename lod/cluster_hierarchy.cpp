@@ -131,34 +131,26 @@ struct SplitGroup {
 // mesh's clusters are the input mesh.
 //
 // The builder sizes and clears its per-vertex tables by the vertex count it is
-// given, so a group is first renumbered onto its own vertices, in their global
-// order (the same walk, so the same clusters): passing the whole mesh's count
-// made every small group pay for every vertex, and the build grew with the
-// square of the mesh.
+// given, so a group is first renumbered onto its own vertices, in the order
+// of their first use: passing the whole mesh's count made every small group
+// pay for every vertex, and the build grew with the square of the mesh.
 std::vector<std::int32_t> meshlet_parts(const JoinedView<Vec3f>& positions, std::vector<Triangle>* triangles,
                                         int cluster_triangles, int* parts) {
   thread_local MeshletScratch s;
   if (s.local.size() < positions.size()) s.local.assign(positions.size(), -1);
   s.used.clear();
-  if (3 * triangles->size() > positions.size() / 4) {
-    // A large share of the mesh (the full mesh): one scan of marks beats a sort.
-    for (const Triangle& t : *triangles)
-      for (std::int32_t v : t) s.local[std::size_t(v)] = 0;
-    for (std::size_t v = 0; v < positions.size(); ++v)
-      if (s.local[v] == 0) s.used.push_back(std::int32_t(v));
-  } else {
-    for (const Triangle& t : *triangles) s.used.insert(s.used.end(), t.begin(), t.end());
-    std::sort(s.used.begin(), s.used.end());
-    s.used.erase(std::unique(s.used.begin(), s.used.end()), s.used.end());
-  }
-  s.local_positions.resize(s.used.size());
-  for (std::size_t i = 0; i < s.used.size(); ++i) s.local_positions[i] = positions[std::size_t(s.used[i])];
-  for (std::size_t i = 0; i < s.used.size(); ++i) s.local[std::size_t(s.used[i])] = std::int32_t(i);
   s.indices.resize(3 * triangles->size());
   for (std::size_t t = 0; t < triangles->size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      s.indices[3 * t + std::size_t(k)] = unsigned(s.local[std::size_t((*triangles)[t][std::size_t(k)])]);
-  for (std::int32_t v : s.used) s.local[std::size_t(v)] = -1;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t v = std::size_t((*triangles)[t][std::size_t(k)]);
+      if (s.local[v] < 0) s.local[v] = std::int32_t(s.used.size()), s.used.push_back(std::int32_t(v));
+      s.indices[3 * t + std::size_t(k)] = unsigned(s.local[v]);
+    }
+  s.local_positions.resize(s.used.size());
+  for (std::size_t i = 0; i < s.used.size(); ++i) {
+    s.local_positions[i] = positions[std::size_t(s.used[i])];
+    s.local[std::size_t(s.used[i])] = -1;
+  }
   const std::size_t max_triangles = std::size_t(std::clamp(cluster_triangles / 4 * 4, 4, 512));
   const std::size_t max_vertices = 255;
   const std::size_t bound = meshopt_buildMeshletsBound(s.indices.size(), max_vertices, max_triangles);
@@ -204,7 +196,8 @@ void split_group(const JoinedView<Vec3f>& positions, int cluster_triangles, Spli
 // core (meshlets never cross runs). One meshlet walk over 7.2 M triangles took
 // 8.3 s of a 25 s hierarchy, on one core.
 constexpr std::size_t kSplitRun = std::size_t(1) << 20;
-// Below this a run is not worth a core of its own.
+// A block's full detail is cut into clusters in runs of at most this, a run
+// a core.
 constexpr std::size_t kSmallestRun = std::size_t(1) << 16;
 
 // Runs work(i) for i in [0, count) on `threads` threads.
@@ -292,52 +285,60 @@ void append_clusters(const SplitGroup& g, std::int32_t own_group, std::uint8_t l
   }
 }
 
-// Phase 3a: the active clusters as a graph, joined by the vertices they share.
+// Phase 3a: the active clusters as a graph, joined by the vertices they
+// share, weighted by how many. Bucketed, not sorted: each vertex's clusters,
+// then each cluster's neighbours counted in a table (sorting the (vertex,
+// cluster) and (cluster, cluster) pairs was a tenth of the blocked build, on
+// one core). Neighbours in ascending order, as METIS's result depends on it.
 // `last`: -1 for every vertex, and so again on return.
-WeightedGraph cluster_graph(const ClusterHierarchy& h, const std::vector<std::int32_t>& active, int threads,
+WeightedGraph cluster_graph(const ClusterHierarchy& h, const std::vector<std::int32_t>& active,
                             const std::vector<std::int32_t>& weld, std::vector<std::int32_t>* last) {
-  // Each vertex once per cluster that uses it (a vertex is in about six of
-  // a cluster's triangles): a sixth of the entries to sort, which was most of
-  // the graph's cost.
-  std::vector<std::pair<std::int32_t, std::int32_t>> uses;  // (vertex, active index)
+  // Each vertex once per cluster that uses it, numbered in order of first
+  // use; uses come cluster by cluster.
+  std::vector<std::int32_t> use_vertex, use_first(active.size() + 1, 0), vertex_weld, seen_by;
   for (std::size_t i = 0; i < active.size(); ++i) {
     const Cluster& c = h.clusters[std::size_t(active[i])];
     for (std::uint32_t t = c.first_triangle; t < c.first_triangle + c.triangle_count; ++t)
       for (std::int32_t v : h.triangles[t]) {
         const std::int32_t w = weld[std::size_t(v)];
-        std::int32_t& seen = (*last)[std::size_t(w)];
-        if (seen != std::int32_t(i)) seen = std::int32_t(i), uses.push_back({w, std::int32_t(i)});
+        std::int32_t& id = (*last)[std::size_t(w)];
+        if (id < 0) id = std::int32_t(vertex_weld.size()), vertex_weld.push_back(w), seen_by.push_back(-1);
+        if (seen_by[std::size_t(id)] != std::int32_t(i)) seen_by[std::size_t(id)] = std::int32_t(i), use_vertex.push_back(id);
       }
+    use_first[i + 1] = std::int32_t(use_vertex.size());
   }
-  for (const auto& [w, i] : uses) (*last)[std::size_t(w)] = -1;
-  // Values are their own keys: the same order on any core count.
-  sort_on_cores(uses.begin(), uses.end(), threads, std::less<>());
-  std::vector<std::uint64_t> pairs;
-  for (std::size_t i = 0; i < uses.size();) {
-    std::size_t j = i;
-    while (j < uses.size() && uses[j].first == uses[i].first) ++j;
-    for (std::size_t a = i; a < j; ++a)
-      for (std::size_t b = a + 1; b < j; ++b) {
-        const std::uint64_t x = std::uint32_t(uses[a].second), y = std::uint32_t(uses[b].second);
-        pairs.push_back(x << 32 | y);
-        pairs.push_back(y << 32 | x);
-      }
-    i = j;
+  for (std::int32_t w : vertex_weld) (*last)[std::size_t(w)] = -1;
+  // Each vertex's clusters, ascending (a counting sort of the uses).
+  std::vector<std::int32_t> cluster_first(vertex_weld.size() + 1, 0), clusters(use_vertex.size());
+  for (std::int32_t id : use_vertex) ++cluster_first[std::size_t(id) + 1];
+  for (std::size_t v = 0; v < vertex_weld.size(); ++v) cluster_first[v + 1] += cluster_first[v];
+  {
+    std::vector<std::int32_t> fill(cluster_first.begin(), cluster_first.end() - 1);
+    for (std::size_t i = 0; i < active.size(); ++i)
+      for (std::int32_t u = use_first[i]; u < use_first[i + 1]; ++u)
+        clusters[std::size_t(fill[std::size_t(use_vertex[std::size_t(u)])]++)] = std::int32_t(i);
   }
-  sort_on_cores(pairs.begin(), pairs.end(), threads, std::less<>());
   WeightedGraph g;
   g.first.assign(active.size() + 1, 0);
-  for (std::size_t i = 0; i < pairs.size();) {
-    std::size_t j = i;
-    while (j < pairs.size() && pairs[j] == pairs[i]) ++j;
-    // Weighted by shared vertices. (Weighting pairs across old group borders
-    // 8x, to force regrouping across them, stalled the bunny at 11.8 k triangles.)
-    g.adjacency.push_back(std::int32_t(pairs[i] & 0xffffffffu));
-    g.weights.push_back(std::int32_t(j - i));
-    ++g.first[std::size_t(pairs[i] >> 32) + 1];
-    i = j;
+  std::vector<std::int32_t> weight(active.size(), 0), neighbours;
+  for (std::size_t i = 0; i < active.size(); ++i) {
+    neighbours.clear();
+    for (std::int32_t u = use_first[i]; u < use_first[i + 1]; ++u) {
+      const std::size_t id = std::size_t(use_vertex[std::size_t(u)]);
+      for (std::int32_t k = cluster_first[id]; k < cluster_first[id + 1]; ++k) {
+        const std::int32_t j = clusters[std::size_t(k)];
+        if (j == std::int32_t(i)) continue;
+        if (weight[std::size_t(j)]++ == 0) neighbours.push_back(j);
+      }
+    }
+    std::sort(neighbours.begin(), neighbours.end());
+    for (std::int32_t j : neighbours) {
+      g.adjacency.push_back(j);
+      g.weights.push_back(weight[std::size_t(j)]);
+      weight[std::size_t(j)] = 0;
+    }
+    g.first[i + 1] = std::int32_t(g.adjacency.size());
   }
-  for (std::size_t i = 0; i < active.size(); ++i) g.first[i + 1] += g.first[i];
   return g;
 }
 
@@ -481,7 +482,7 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
     int group_count = 1;
     std::vector<std::int32_t> group_of(active.size(), 0);
     if (active.size() > std::size_t(options.group_clusters))
-      group_of = partition_graph(cluster_graph(h, active, s.threads, s.weld, &s.vertex_group), options.group_clusters, &group_count);
+      group_of = partition_graph(cluster_graph(h, active, s.weld, &s.vertex_group), options.group_clusters, &group_count);
     std::vector<std::vector<std::int32_t>> members;
     members.resize(std::size_t(group_count));
     for (std::size_t i = 0; i < active.size(); ++i) members[std::size_t(group_of[i])].push_back(active[i]);
@@ -618,20 +619,12 @@ void lock_block_borders(Shared& s, Each each) {
   for (std::int32_t v : touched) s.vertex_group[std::size_t(v)] = -1;
 }
 
-// Phase 1 of a blocked build: the triangles reordered in place into blocks
-// of at most `block`, by halving at the median centroid across the longest
-// side of each part's box, as a KD-tree does (Nexus cuts its first blocks
-// so): straight borders, the shortest a cut into boxes gives. (Runs of the
-// Morton curve had staircase borders, and cuts up to 1.4x the in-core
-// error at 20 k-50 k triangles of 3.3 M.) Returns the blocks' starts, the
-// end last.
-//
-// The blocks and the order inside each depend on the triangles' positions
-// alone, not on the order they came in: the median by a total order, each
-// block sorted by it at the end, across its own longest side. A surface welded from bricks numbers its
-// triangles otherwise than one made in core; the same blocks make it the
-// same hierarchy.
-std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vector<Triangle>* triangles, std::size_t block) {
+// Splits [begin, end) of `triangles` until its parts hold at most `block`,
+// appending their starts in order; the two halves of a split on threads of
+// their own while `threads` allows (the splits and sorts were 5-8 % of a
+// blocked build, on one core).
+void kd_split(const JoinedView<Vec3f>& positions, std::vector<Triangle>* triangles, std::size_t begin,
+              std::size_t end, std::size_t block, int threads, std::vector<std::size_t>* starts) {
   auto centroid = [&](const Triangle& t) {
     return positions[std::size_t(t[0])] + positions[std::size_t(t[1])] + positions[std::size_t(t[2])];
   };
@@ -652,47 +645,69 @@ std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vect
       return false;
     };
   };
-  std::vector<std::size_t> starts;
-  std::vector<std::pair<std::size_t, std::size_t>> todo{{0, triangles->size()}};
-  while (!todo.empty()) {
-    const auto [begin, end] = todo.back();
-    todo.pop_back();
-    if (end - begin <= block) {
-      // Sorted across the block's longest side, so that its halves (a part a
-      // core, in the first pass) are a KD split too; the centroids are taken
-      // once, as the comparator alone loads six vertices from all over.
-      std::vector<std::pair<Vec3f, std::uint32_t>> keys(end - begin);
-      Aabb box;
-      for (std::size_t i = begin; i < end; ++i) {
-        keys[i - begin] = {centroid((*triangles)[i]), std::uint32_t(i)};
-        box.extend(keys[i - begin].first);
-      }
-      int axis = 0;
-      box.extent().maxCoeff(&axis);
-      const auto tied = before(axis);
-      std::sort(keys.begin(), keys.end(), [&](const auto& a, const auto& b) {
-        for (int k = 0; k < 3; ++k) {
-          const int i = (axis + k) % 3;
-          if (a.first[i] != b.first[i]) return a.first[i] < b.first[i];
-        }
-        return tied((*triangles)[a.second], (*triangles)[b.second]);
-      });
-      std::vector<Triangle> sorted(end - begin);
-      for (std::size_t i = 0; i < keys.size(); ++i) sorted[i] = (*triangles)[keys[i].second];
-      std::copy(sorted.begin(), sorted.end(), triangles->begin() + std::ptrdiff_t(begin));
-      starts.push_back(begin);
-      continue;
-    }
+  if (end - begin <= block) {
+    // Sorted across the block's longest side, so that its runs (a core
+    // each, in the first pass) are a KD split too; the centroids are taken
+    // once, as the comparator alone loads six vertices from all over.
+    std::vector<std::pair<Vec3f, std::uint32_t>> keys(end - begin);
     Aabb box;
-    for (std::size_t i = begin; i < end; ++i) box.extend(centroid((*triangles)[i]));
+    for (std::size_t i = begin; i < end; ++i) {
+      keys[i - begin] = {centroid((*triangles)[i]), std::uint32_t(i)};
+      box.extend(keys[i - begin].first);
+    }
     int axis = 0;
     box.extent().maxCoeff(&axis);
-    const std::size_t middle = begin + (end - begin) / 2;
-    std::nth_element(triangles->begin() + std::ptrdiff_t(begin), triangles->begin() + std::ptrdiff_t(middle),
-                     triangles->begin() + std::ptrdiff_t(end), before(axis));
-    todo.push_back({middle, end});
-    todo.push_back({begin, middle});
+    const auto tied = before(axis);
+    std::sort(keys.begin(), keys.end(), [&](const auto& a, const auto& b) {
+      for (int k = 0; k < 3; ++k) {
+        const int i = (axis + k) % 3;
+        if (a.first[i] != b.first[i]) return a.first[i] < b.first[i];
+      }
+      return tied((*triangles)[a.second], (*triangles)[b.second]);
+    });
+    std::vector<Triangle> sorted(end - begin);
+    for (std::size_t i = 0; i < keys.size(); ++i) sorted[i] = (*triangles)[keys[i].second];
+    std::copy(sorted.begin(), sorted.end(), triangles->begin() + std::ptrdiff_t(begin));
+    starts->push_back(begin);
+    return;
   }
+  Aabb box;
+  for (std::size_t i = begin; i < end; ++i) box.extend(centroid((*triangles)[i]));
+  int axis = 0;
+  box.extent().maxCoeff(&axis);
+  const std::size_t middle = begin + (end - begin) / 2;
+  std::nth_element(triangles->begin() + std::ptrdiff_t(begin), triangles->begin() + std::ptrdiff_t(middle),
+                   triangles->begin() + std::ptrdiff_t(end), before(axis));
+  if (threads < 2) {
+    kd_split(positions, triangles, begin, middle, block, 1, starts);
+    kd_split(positions, triangles, middle, end, block, 1, starts);
+    return;
+  }
+  std::vector<std::size_t> upper;
+  std::thread other([&] { kd_split(positions, triangles, middle, end, block, threads / 2, &upper); });
+  kd_split(positions, triangles, begin, middle, block, threads - threads / 2, starts);
+  other.join();
+  starts->insert(starts->end(), upper.begin(), upper.end());
+}
+
+// Phase 1 of a blocked build: the triangles reordered in place into blocks
+// of at most `block`, by halving at the median centroid across the longest
+// side of each part's box, as a KD-tree does (Nexus cuts its first blocks
+// so): straight borders, the shortest a cut into boxes gives. (Runs of the
+// Morton curve had staircase borders, and cuts up to 1.4x the in-core
+// error at 20 k-50 k triangles of 3.3 M.) Returns the blocks' starts, the
+// end last.
+//
+// The blocks and the order inside each depend on the triangles' positions
+// alone, not on the order they came in nor on the core count: the median
+// by a total order, each block sorted by it at the end, across its own
+// longest side. A surface welded from bricks numbers its triangles
+// otherwise than one made in core; the same blocks make it the same
+// hierarchy.
+std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vector<Triangle>* triangles,
+                                   std::size_t block, int threads) {
+  std::vector<std::size_t> starts;
+  kd_split(positions, triangles, 0, triangles->size(), block, threads, &starts);
   starts.push_back(triangles->size());
   return starts;
 }
@@ -718,20 +733,22 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std
   Block carried;
   int round = 1;
   {
-    const std::vector<std::size_t> starts = kd_blocks(s.positions, &triangles, block);
+    const std::vector<std::size_t> starts = kd_blocks(s.positions, &triangles, block, s.threads);
     const std::size_t blocks = starts.size() - 1;
     lock_block_borders(s, [&](auto visit) {
       for (std::size_t b = 0; b < blocks; ++b)
         for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) visit(triangles[i], std::int32_t(b));
     });
     for (std::size_t b = 0; b < blocks; ++b) {
-      // The block cut into clusters on every core: halved as the blocks
-      // were, a part a core (one meshlet walk over a block of 2 M triangles
-      // took a second on one core, the rest waiting).
+      // The block cut into clusters in parts of at most kSmallestRun, on
+      // every core: parts along the block's longest side, as the blocks
+      // were cut (one meshlet walk over a block of 2 M triangles took a
+      // second on one core, the rest waiting). By size, not by core count:
+      // the same clusters on any machine.
       SplitGroup full;
       {
         const std::size_t size = starts[b + 1] - starts[b];
-        const std::size_t parts = s.threads > 1 && size >= 2 * kSmallestRun ? std::size_t(s.threads) : 1;
+        const std::size_t parts = std::max<std::size_t>(1, (size + kSmallestRun - 1) / kSmallestRun);
         std::vector<std::size_t> runs(parts + 1);
         for (std::size_t p = 0; p <= parts; ++p) runs[p] = p * size / parts;
         const Triangle* own = triangles.data() + starts[b];
@@ -775,7 +792,7 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std
     std::iota(all.begin(), all.end(), 0);
     int parts = 1;
     const int per_block = int(std::max<std::size_t>(2, block * n / left));
-    const std::vector<std::int32_t> part = partition_graph(cluster_graph(carried.h, all, s.threads, s.weld, &s.vertex_group), per_block, &parts);
+    const std::vector<std::int32_t> part = partition_graph(cluster_graph(carried.h, all, s.weld, &s.vertex_group), per_block, &parts);
     std::vector<std::size_t> starts(std::size_t(parts) + 1, 0);
     for (std::int32_t p : part) ++starts[std::size_t(p) + 1];
     for (std::size_t b = 0; b < std::size_t(parts); ++b) starts[b + 1] += starts[b];
@@ -895,7 +912,7 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
     // In core: the whole mesh is one block.
     Block all;
     all.h.full_triangles = std::int64_t(triangles.size());
-    if (triangles.size() >= 2 * kSplitRun && s.threads > 1) {
+    if (triangles.size() >= 2 * kSplitRun) {
       append_clusters(split_large_mesh(positions, triangles, options.cluster_triangles, s.threads), -1, 0, &all.h,
                       &all.active);
     } else {

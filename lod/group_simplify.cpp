@@ -20,50 +20,53 @@ constexpr double kSingular = 1e-9;
 // against the faces' area: a real boundary then moves along itself, not inwards.
 constexpr double kBoundaryWeight = 4.0;
 
-// x^T A x + 2 b^T x + c over the first `dim` coordinates, A symmetric (upper
-// triangle, row by row). Sums of squared distances to planes in R^dim.
+// x^T A x + 2 b^T x + c over the first `dim` coordinates, packed for that
+// dimension: A's upper triangle row by row, then b, then c. Sums of squared
+// distances to planes in R^dim. (Packed, a 6-dimensional quadric is 28
+// doubles, not the 55 of the largest: adding them was a tenth of the
+// instructions of a whole-mesh build.)
 struct Quadric {
-  std::array<double, kUpper> a{};
-  std::array<double, kMaxDim> b{};
-  double c = 0;
+  std::array<double, kUpper + kMaxDim + 1> v{};
 
-  void add(const Quadric& o) {
-    for (int i = 0; i < kUpper; ++i) a[std::size_t(i)] += o.a[std::size_t(i)];
-    for (int i = 0; i < kMaxDim; ++i) b[std::size_t(i)] += o.b[std::size_t(i)];
-    c += o.c;
+  static int upper(int dim) { return dim * (dim + 1) / 2; }
+  static int row(int i, int dim) { return i * dim - i * (i - 1) / 2; }  // where A's row i starts
+  void add(const Quadric& o, int dim) {
+    const int n = upper(dim) + dim + 1;
+    for (int i = 0; i < n; ++i) v[std::size_t(i)] += o.v[std::size_t(i)];
   }
   double evaluate(const double* x, int dim) const {
-    double e = c;
+    const int n = upper(dim);
+    double e = v[std::size_t(n + dim)];
     int k = 0;
     for (int i = 0; i < dim; ++i) {
-      double row = a[std::size_t(k++)] * x[i];
-      for (int j = i + 1; j < dim; ++j) row += 2 * a[std::size_t(k++)] * x[j];
-      e += x[i] * row + 2 * b[std::size_t(i)] * x[i];
-      k += kMaxDim - dim;  // skip the unused columns of this row
+      double r = v[std::size_t(k++)] * x[i];
+      for (int j = i + 1; j < dim; ++j) r += 2 * v[std::size_t(k++)] * x[j];
+      e += x[i] * r + 2 * v[std::size_t(n + i)] * x[i];
     }
     return e;
   }
-  // Adds w * (I - sum e e^T) for the orthonormal `basis` of a plane through q.
-  void add_plane(const double* q, const double (*basis)[kMaxDim], int basis_size, int dim, double w) {
+  // Adds w * (I - sum e e^T) for the orthonormal `basis` of a plane through
+  // q, over the first `plane_dim` of the quadric's `dim` coordinates.
+  void add_plane(const double* q, const double (*basis)[kMaxDim], int basis_size, int plane_dim, int dim, double w) {
+    const int n = upper(dim);
     double qe[2] = {0, 0};
     for (int s = 0; s < basis_size; ++s)
-      for (int i = 0; i < dim; ++i) qe[s] += q[i] * basis[s][i];
-    int k = 0;
-    for (int i = 0; i < dim; ++i) {
-      for (int j = i; j < dim; ++j) {
-        double v = i == j ? 1.0 : 0.0;
-        for (int s = 0; s < basis_size; ++s) v -= basis[s][i] * basis[s][j];
-        a[std::size_t(k++)] += w * v;
+      for (int i = 0; i < plane_dim; ++i) qe[s] += q[i] * basis[s][i];
+    for (int i = 0; i < plane_dim; ++i) {
+      int k = row(i, dim);
+      for (int j = i; j < plane_dim; ++j) {
+        double a = i == j ? 1.0 : 0.0;
+        for (int s = 0; s < basis_size; ++s) a -= basis[s][i] * basis[s][j];
+        v[std::size_t(k++)] += w * a;
       }
-      k += kMaxDim - dim;
       double bi = -q[i];
       for (int s = 0; s < basis_size; ++s) bi += qe[s] * basis[s][i];
-      b[std::size_t(i)] += w * bi;
+      v[std::size_t(n + i)] += w * bi;
     }
     double qq = 0;
-    for (int i = 0; i < dim; ++i) qq += q[i] * q[i];
+    for (int i = 0; i < plane_dim; ++i) qq += q[i] * q[i];
     for (int s = 0; s < basis_size; ++s) qq -= qe[s] * qe[s];
-    c += w * qq;
+    v[std::size_t(n + dim)] += w * qq;
   }
 };
 
@@ -76,37 +79,40 @@ template <int D>
 bool sum_minimum(const Quadric& p, const Quadric& q, double* out, double* value) {
   double m[D][D], y[D];
   double largest = 0;
+  constexpr int n = D * (D + 1) / 2;  // where b starts
   for (int i = 0; i < D; ++i) {
-    const int row = i * kMaxDim - i * (i - 1) / 2;  // the upper triangle's row i starts here
-    for (int j = i; j < D; ++j) m[j][i] = p.a[std::size_t(row + j - i)] + q.a[std::size_t(row + j - i)];
+    const int row = Quadric::row(i, D);
+    for (int j = i; j < D; ++j) m[j][i] = p.v[std::size_t(row + j - i)] + q.v[std::size_t(row + j - i)];
     largest = std::max(largest, std::abs(m[i][i]));
   }
   if (!(largest > 0)) return false;
   for (int j = 0; j < D; ++j) {  // lower triangle: L below, D on the diagonal
+    double ld[D];                 // row j of L times D, taken once for the column
     double d = m[j][j];
-    for (int k = 0; k < j; ++k) d -= m[j][k] * m[j][k] * m[k][k];
+    for (int k = 0; k < j; ++k) ld[k] = m[j][k] * m[k][k], d -= m[j][k] * ld[k];
     if (!(d > kSingular * largest)) return false;
     m[j][j] = d;
+    const double inverse = 1 / d;
     for (int i = j + 1; i < D; ++i) {
       double v = m[i][j];
-      for (int k = 0; k < j; ++k) v -= m[i][k] * m[j][k] * m[k][k];
-      m[i][j] = v / d;
+      for (int k = 0; k < j; ++k) v -= m[i][k] * ld[k];
+      m[i][j] = v * inverse;
     }
   }
   for (int i = 0; i < D; ++i) {
-    double v = -(p.b[std::size_t(i)] + q.b[std::size_t(i)]);
+    double v = -(p.v[std::size_t(n + i)] + q.v[std::size_t(n + i)]);
     for (int k = 0; k < i; ++k) v -= m[i][k] * y[k];
     y[i] = v;
   }
   for (int i = 0; i < D; ++i) y[i] /= m[i][i];
-  double at = p.c + q.c;  // x^T A x + 2 b^T x + c where A x = -b
+  double at = p.v[std::size_t(n + D)] + q.v[std::size_t(n + D)];  // x^T A x + 2 b^T x + c where A x = -b
   for (int i = D - 1; i >= 0; --i) {
     double v = y[i];
     for (int k = i + 1; k < D; ++k) v -= m[k][i] * out[k];
     if (!std::isfinite(v)) return false;
     out[i] = v;
   }
-  for (int i = 0; i < D; ++i) at += (p.b[std::size_t(i)] + q.b[std::size_t(i)]) * out[i];
+  for (int i = 0; i < D; ++i) at += (p.v[std::size_t(n + i)] + q.v[std::size_t(n + i)]) * out[i];
   *value = at;
   return true;
 }
@@ -366,10 +372,8 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
     if (!(area > 0)) continue;
     double basis[2][kMaxDim];
     Quadric full;
-    if (triangle_basis(p[0], p[1], p[2], q.dim, basis)) full.add_plane(p[0], basis, 2, q.dim, area);
-    for (int v : tri) {
-      q.full[std::size_t(v)].add(full);
-    }
+    if (triangle_basis(p[0], p[1], p[2], q.dim, basis)) full.add_plane(p[0], basis, 2, q.dim, q.dim, area);
+    for (int v : tri) q.full[std::size_t(v)].add(full, q.dim);
     // Border edges: a plane through the edge and the face normal, so that a
     // border slides along itself rather than inwards.
     for (int k = 0; k < 3; ++k) {
@@ -386,8 +390,8 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
       const Eigen::Vector3d e0 = edge.normalized(), e1 = normal.normalized();
       for (int i = 0; i < 3; ++i) cb[0][i] = e0[i], cb[1][i] = e1[i];
       Quadric constraint;
-      constraint.add_plane(q.x[std::size_t(u)].data(), cb, 2, 3, kBoundaryWeight * edge.squaredNorm());
-      for (int v : {u, w}) q.full[std::size_t(v)].add(constraint);
+      constraint.add_plane(q.x[std::size_t(u)].data(), cb, 2, 3, q.dim, kBoundaryWeight * edge.squaredNorm());
+      for (int v : {u, w}) q.full[std::size_t(v)].add(constraint, q.dim);
     }
   }
 
@@ -499,15 +503,12 @@ std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopol
     Candidate c = heap.top();
     heap.pop();
     if (removed[std::size_t(c.from)] || removed[std::size_t(c.to)]) continue;
-    // Stale entries: costs only grow as quadrics merge, so recompute and requeue.
+    // Stale: a collapse since moved an end, and pushed the edge afresh then
+    // (push_around). Recomputing stale entries instead, and requeueing
+    // them, computed a ninth of all meetings, each a duplicate.
     if (meetings[std::size_t(c.meeting)].from_version != version[std::size_t(c.from)] ||
         meetings[std::size_t(c.meeting)].to_version != version[std::size_t(c.to)]) {
-      const Candidate now = candidate(c.from, c.to);
-      if (now.cost > c.cost * 1.0001f + 1e-30f) {
-        heap.push(now);
-        continue;
-      }
-      c.meeting = now.meeting;
+      continue;
     }
     const Meeting m = meetings[std::size_t(c.meeting)];
     if (m.swap) std::swap(c.from, c.to);
@@ -529,7 +530,7 @@ std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopol
     moved_to[std::size_t(c.from)] = c.to;
     if (!std::equal(m.x.begin(), m.x.begin() + q.dim, q.x[std::size_t(c.to)].begin()))
       q.x[std::size_t(c.to)] = m.x, (*moved)[std::size_t(c.to)] = 1;
-    q.full[std::size_t(c.to)].add(q.full[std::size_t(c.from)]);
+    q.full[std::size_t(c.to)].add(q.full[std::size_t(c.from)], q.dim);
     ++version[std::size_t(c.to)];
     auto& list = g.incident[std::size_t(c.to)];
     list.erase(std::remove_if(list.begin(), list.end(), [&](int t) { return g.dead[std::size_t(t)] != 0; }),

@@ -60,6 +60,9 @@ double resident_bytes() {
 // of the budget sizes the blocks, never below kSmallestBlock: a budget too
 // small for that is warned of, since the surface is made by then.
 constexpr double kBlockBytesPerTriangle = 400.0;
+// The finished clusters' triangles, held in memory when no spool takes them:
+// the hierarchy holds about 2.3 times the full detail, 12 bytes a triangle.
+constexpr double kHeldClusterBytesPerTriangle = 2.4 * 12.0;
 constexpr std::int64_t kSmallestBlock = 65536;
 // The cluster stage's peak in blocks of `block` triangles.
 double blocked_cluster_bytes(std::size_t triangles, std::int64_t block) {
@@ -281,8 +284,13 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
     ClusterOptions clusters;
     clusters.threads = options.reconstruct.threads;
     clusters.block_triangles = report.cluster_block;
-    if (report.cluster_block > 0 && report.full_triangles > std::size_t(report.cluster_block) &&
-        !options.work_dir.empty()) {
+    // Finished clusters go to a spool on disk only where memory cannot hold
+    // them too: writing them cost 4 % of an in-core build's cluster stage.
+    const bool blocked = report.cluster_block > 0 && report.full_triangles > std::size_t(report.cluster_block);
+    const double held = kHeldClusterBytesPerTriangle * double(report.full_triangles);
+    if (blocked && (options.work_dir.empty() || report.estimated_cluster_bytes + held <= budget))
+      report.estimated_cluster_bytes += held;
+    else if (blocked) {
       std::filesystem::create_directories(options.work_dir);
       clusters.spool = std::make_shared<TriangleSpool>(
           (std::filesystem::path(options.work_dir) / "cluster_triangles.spool").string());
