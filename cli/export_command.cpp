@@ -1,11 +1,14 @@
 // scan2lod export: several levels of a .mco model in one process and one
 // model load. glTF (.glb, .gltf) holds them as one MSFT_lod chain over shared
-// vertices (io/gltf_file.h); a mesh format writes one file per level.
+// vertices (io/gltf_file.h); a mesh format writes one file per level;
+// --format 3dtiles writes a 3D Tiles 1.1 tileset folder (delivery/tileset.h).
 #include "cli/commands.h"
 #include "cli/level_warnings.h"
 #include "cli/outputs.h"
 #include "cli/terminal.h"
 #include "core/error.h"
+#include "core/progress.h"
+#include "delivery/tileset.h"
 #include "io/gltf_file.h"
 #include "io/mesh_file.h"
 #include "lod/level_chain.h"
@@ -74,6 +77,55 @@ std::string level_path(const std::string& output, const std::string& format, std
   return (p.parent_path() / (p.stem().string() + "_LOD" + std::to_string(i) + "." + format)).string();
 }
 
+// --format 3dtiles: the cluster hierarchy as a tileset folder.
+struct TilesetArgs {
+  std::string model, output, structure;
+  long long tile_triangles = 16384;
+  bool no_quantize = false, no_meshopt = false, json = false;
+};
+
+void export_tileset(const TilesetArgs& args) {
+  if (!args.structure.empty() && args.structure != "clusters")
+    throw InputError(args.model, "--format 3dtiles tiles the cluster hierarchy; --structure " + args.structure +
+                                     " cannot be tiled");
+  if (args.tile_triangles < 1) throw InputError("", "--tile-triangles must be >= 1");
+  refuse_overwriting_inputs(args.output, {args.model});
+  auto start = std::chrono::steady_clock::now();
+  const LodModel model = load_model(args.model);
+  const double load_seconds = seconds_since(start);
+  TilesetOptions options;
+  options.tiles.max_triangles = args.tile_triangles;
+  options.glb.quantize = !args.no_quantize;
+  options.glb.meshopt = !args.no_meshopt;
+  options.glb.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
+  if (ProgressSink sink = progress_sink(); sink && Progress::enabled())
+    options.progress = [sink](const std::string& stage, double f) { sink("tiles: " + stage, f, f >= 1); };
+  const TilesetReport r = write_tileset(model, args.output, options, args.model);
+  if (args.json) {
+    nlohmann::ordered_json j = {{"structure", "clusters"},
+                                {"format", "3dtiles"},
+                                {"folder", args.output},
+                                {"tiles", r.tiles},
+                                {"content_tiles", r.content_tiles},
+                                {"leaves", r.leaves},
+                                {"depth", r.depth},
+                                {"bytes", r.bytes},
+                                {"largest_tile_bytes", r.largest_tile_bytes},
+                                {"largest_tile_triangles", r.largest_tile_triangles},
+                                {"root_triangles", r.root_triangles},
+                                {"root_error", r.root_error},
+                                {"triangles", r.triangles}};
+    j["seconds"] = {{"load", load_seconds}, {"plan", r.plan_seconds}, {"write", r.write_seconds}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  say("%zu tiles (%zu with content, depth %d): root %lld triangles at error %.3g, largest tile %lld triangles, "
+      "%.2f MB (largest %.1f kB); load %.2f s, plan %.2f s, write %.2f s -> %s/tileset.json\n",
+      r.tiles, r.content_tiles, r.depth, (long long)r.root_triangles, r.root_error,
+      (long long)r.largest_tile_triangles, double(r.bytes) / 1e6, double(r.largest_tile_bytes) / 1e3, load_seconds,
+      r.plan_seconds, r.write_seconds, args.output.c_str());
+}
+
 }  // namespace
 
 void add_export_command(CLI::App& app) {
@@ -83,7 +135,8 @@ void add_export_command(CLI::App& app) {
     std::vector<long long> budgets;
     double pixel_error = 1;
     int height = 1080;
-    bool no_quantize = false, json = false, at_most = false;
+    bool no_quantize = false, json = false, at_most = false, no_meshopt = false;
+    long long tile_triangles = 16384;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("export", "Several levels of a .mco model -> one glTF LOD chain, or a file each");
@@ -104,9 +157,16 @@ void add_export_command(CLI::App& app) {
                              ->delimiter(',');
   cmd->add_flag("--at-most", args->at_most, "With --triangles: no level over its budget")->needs(budgets);
   levels->excludes(budgets);
-  cmd->add_option("--format", args->format, "glb, gltf, ply, obj, off, stl or vtp (default: -o's extension)")
-      ->check(CLI::IsMember({"glb", "gltf", "ply", "obj", "off", "stl", "vtp"}, CLI::ignore_case));
-  cmd->add_flag("--no-quantize", args->no_quantize, "glTF: 32-bit float positions and normals");
+  cmd->add_option("--format", args->format,
+                  "glb, gltf, ply, obj, off, stl or vtp (default: -o's extension), or 3dtiles (-o names a folder: "
+                  "a 3D Tiles 1.1 tileset of the cluster hierarchy)")
+      ->check(CLI::IsMember({"glb", "gltf", "ply", "obj", "off", "stl", "vtp", "3dtiles"}, CLI::ignore_case));
+  cmd->add_flag("--no-quantize", args->no_quantize, "glTF and 3dtiles: 32-bit float positions and normals");
+  const std::vector<CLI::Option*> tileset_flags = {
+      cmd->add_option("--tile-triangles", args->tile_triangles,
+                      "3dtiles only: most triangles a tile holds (the root holds the coarsest cut)")
+          ->default_val(16384),
+      cmd->add_flag("--no-meshopt", args->no_meshopt, "3dtiles only: no EXT_meshopt_compression")};
   // Only glTF stores screen coverage: with a mesh format they would change nothing.
   const std::vector<CLI::Option*> coverage_flags = {
       cmd->add_option("--pixel-error", args->pixel_error,
@@ -115,7 +175,29 @@ void add_export_command(CLI::App& app) {
       cmd->add_option("--height", args->height, "glTF only: screen coverage, screen height in pixels")
           ->default_val(1080)};
   cmd->add_flag("--json", args->json, "Print the levels, files, timings and any warnings (\"warnings\") as JSON");
-  cmd->callback([args, coverage_flags] {
+  cmd->callback([args, coverage_flags, tileset_flags, levels, budgets] {
+    std::string lower_format = args->format;
+    std::transform(lower_format.begin(), lower_format.end(), lower_format.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (lower_format == "3dtiles") {
+      for (const CLI::Option* flag : {levels, budgets})
+        if (flag->count())
+          throw CLI::ValidationError(flag->get_name(), "does not apply to --format 3dtiles: a tileset holds every "
+                                                       "level, from the coarsest cut at its root to full detail");
+      for (const CLI::Option* flag : coverage_flags)
+        if (flag->count())
+          throw CLI::ValidationError(flag->get_name(), "does not apply to --format 3dtiles: the viewer refines "
+                                                       "by each tile's geometricError");
+      std::string structure = args->structure;
+      std::transform(structure.begin(), structure.end(), structure.begin(),
+                     [](unsigned char c) { return char(std::tolower(c)); });
+      export_tileset({args->model, args->output, structure, args->tile_triangles, args->no_quantize,
+                      args->no_meshopt, args->json});
+      return;
+    }
+    for (const CLI::Option* flag : tileset_flags)
+      if (flag->count())
+        throw CLI::ValidationError(flag->get_name(), "applies to --format 3dtiles only");
     Warnings warnings(args->json);
     const bool default_levels = args->percents.empty() && args->budgets.empty();
     if (default_levels) args->percents = {100, 25, 5, 1};

@@ -1,0 +1,80 @@
+// From the cluster DAG to a tree of tiles (3D Tiles 1.1, REPLACE refinement).
+//
+// The cluster hierarchy (lod/cluster_hierarchy.h) is a DAG: a group's clusters
+// come from several clusters below, which other groups share. 3D Tiles wants a
+// tree. The tree here is spatial: an octree over the model's bounds, each cell
+// holding one cut of the DAG restricted to the cell, finer going down, as
+// Cesium's tilers and Nexus's patches hold one level of detail per cell:
+//
+// - the root holds the coarsest cut (every group applied), the whole model;
+// - a cell below holds the finest uniform cut whose triangles that touch the
+//   cell (their bounding box meets the cell's) number at most
+//   TileOptions::max_triangles, strictly finer than its parent's cut; a cell
+//   whose parent's next finer cut does not fit holds nothing and passes its
+//   parent's cut on to its own octants;
+// - a cell at full detail (no group applied) is a leaf, so the leaves hold
+//   every full-detail triangle.
+//
+// A triangle that crosses a cell's face is in both cells, so neighbouring
+// tiles overlap by a triangle's width instead of leaving a hole where their
+// cuts, of different thresholds, end differently: what is left between them
+// is the distance between two cuts' surfaces, each within its measured error
+// of the full-detail surface (delivery/tile_gaps.h measures it).
+//
+// A tile's geometric error is measured, not halved by rule: the largest error
+// of the groups that made its clusters (0 at full detail), raised to its
+// children's where a child's is larger, so that errors never grow going down.
+#pragma once
+
+#include "core/types.h"
+#include "lod/lod_model.h"
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace scan2lod {
+
+struct TileOptions {
+  // Most triangles a tile holds; the root holds the coarsest cut whatever it
+  // holds (at most kCoarsestTriangles, 256, on any mesh of fewer pieces).
+  std::int64_t max_triangles = 16384;
+  int max_depth = 20;  // cells below this depth hold their cut even when over budget
+  // Called with the share of the model's cluster triangles placed so far; may be empty.
+  std::function<void(double)> progress;
+};
+
+// A threshold of the uniform cut (lod/cluster_cut.h): a group is applied when
+// its error is at most the threshold. kFullDetail applies none.
+constexpr float kFullDetail = -1.f;
+
+struct Tile {
+  int parent = -1;                   // index in TileTree::tiles, -1 for the root
+  std::vector<int> children;
+  int depth = 0;
+  std::string name;                  // the octant path: "r", "r5", "r57", ...
+  Aabb cell;                         // the octree cell
+  float threshold = kFullDetail;     // the cut it holds
+  std::vector<Triangle> triangles;   // its content, into the model's vertices; empty: no content
+  std::vector<std::int32_t> clusters;  // the clusters those triangles come from
+  float content_error = 0;           // the largest own-group error of those clusters (0: full detail)
+  float geometric_error = 0;         // max of content_error over its subtree
+  Aabb content_box;                  // around its triangles' vertices
+  Aabb subtree_box;                  // around its and its descendants' content
+  bool has_content() const { return !triangles.empty(); }
+  bool leaf() const { return children.empty(); }
+};
+
+struct TileTree {
+  std::vector<Tile> tiles;   // tiles[0] is the root; a parent comes before its children
+  Aabb bounds;               // the cluster hierarchy's vertices
+  float coarsest_error = 0;  // the coarsest cut's threshold (the largest group error)
+  std::int64_t full_triangles = 0;
+};
+
+// Plans the tiles of `model`'s cluster hierarchy. Throws InputError (naming
+// `source`) when the model has no cluster hierarchy.
+TileTree plan_tiles(const LodModel& model, const TileOptions& options = {}, const std::string& source = "");
+
+}  // namespace scan2lod

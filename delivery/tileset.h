@@ -1,0 +1,68 @@
+// A 3D Tiles 1.1 tileset of a model's cluster hierarchy (Cesium, *3D Tiles
+// Specification 1.1*, 2023): `tileset.json` and one .glb per tile with
+// content, in a folder, REPLACE refinement throughout.
+//
+// - The tree is delivery/tile_tree.h's: octree cells over cuts of the DAG at
+//   falling measured errors, the coarsest cut at the root, full detail at
+//   the leaves.
+// - Each tile's boundingVolume is a box around its own and its descendants'
+//   vertices (so that a parent encloses its children), and its content's
+//   boundingVolume a box around its own vertices alone; both axis-aligned in
+//   the model's frame, widened by one quantization step.
+// - The model's origin (LodModel::origin, georeferenced inputs) is the
+//   root's transform, a translation in double, so that the tileset lies in
+//   the inputs' frame while the tiles' floats stay local.
+// - tileset.geometricError is the model's diagonal: the error of drawing
+//   nothing.
+//
+// The folder appears complete or not at all: the tiles are written into a
+// hidden folder beside it, which is renamed into place at the end (an old
+// tileset there is replaced; any other folder is refused).
+#pragma once
+
+#include "delivery/tile_glb.h"
+#include "delivery/tile_tree.h"
+#include "lod/lod_model.h"
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+namespace scan2lod {
+
+struct TilesetOptions {
+  TileOptions tiles;
+  TileGlbOptions glb;
+  // Called with a stage's name ("plan", "write") and how far it is (0 to 1);
+  // may be empty.
+  std::function<void(const std::string&, double)> progress;
+};
+
+struct TilesetReport {
+  std::size_t tiles = 0, content_tiles = 0, leaves = 0;
+  int depth = 0;                      // the deepest tile's depth (root: 0)
+  std::uint64_t bytes = 0;            // tileset.json and the tiles
+  std::uint64_t largest_tile_bytes = 0;
+  std::int64_t largest_tile_triangles = 0;  // the root aside when it holds more
+  std::int64_t root_triangles = 0;
+  std::int64_t triangles = 0;         // over every tile
+  double root_error = 0;
+  double plan_seconds = 0, write_seconds = 0;
+};
+
+// Writes the tileset of `model` into the folder `dir` (created; an existing
+// tileset there is replaced). `source` names the model in errors. Throws
+// InputError when the model has no cluster hierarchy, when `dir` is a folder
+// that holds something other than a tileset, or when a write fails; nothing
+// is left at `dir` then.
+TilesetReport write_tileset(const LodModel& model, const std::string& dir, const TilesetOptions& options = {},
+                            const std::string& source = "");
+
+// The tileset.json text for `tree`, its tiles named `tiles/NAME.glb`.
+std::string tileset_json(const TileTree& tree, const Vec3d& origin, float quantization_step,
+                         const std::string& generator);
+
+// The step of the grid the tiles' positions are quantized on (0 unquantized).
+float tileset_quantization_step(const TileTree& tree, const TileGlbOptions& options);
+
+}  // namespace scan2lod
