@@ -11,6 +11,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <stdexcept>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -108,8 +112,9 @@ Sphere enclosing_sphere(const std::vector<Sphere>& spheres) {
 // Buffers of the meshlet builder, kept per thread across groups: fresh ones
 // for every group were page faults on every call.
 struct MeshletScratch {
-  std::vector<std::int32_t> used;   // the group's vertices, ascending
+  std::vector<std::int32_t> used;   // the group's vertices, in order of first use
   std::vector<std::int32_t> local;  // global vertex -> index in used; -1 between groups
+  std::vector<std::int32_t> local_placed;  // the same for the group's placed vertices
   std::vector<Vec3f> local_positions;
   std::vector<unsigned> indices;
   std::vector<meshopt_Meshlet> meshlets;
@@ -134,22 +139,26 @@ struct SplitGroup {
 // given, so a group is first renumbered onto its own vertices, in the order
 // of their first use: passing the whole mesh's count made every small group
 // pay for every vertex, and the build grew with the square of the mesh.
-std::vector<std::int32_t> meshlet_parts(const JoinedView<Vec3f>& positions, std::vector<Triangle>* triangles,
-                                        int cluster_triangles, int* parts) {
+// A vertex -1 - i is the group's placed vertex i, at placed[i].
+std::vector<std::int32_t> meshlet_parts(const JoinedView<Vec3f>& positions, const std::vector<Vec3f>& placed,
+                                        std::vector<Triangle>* triangles, int cluster_triangles, int* parts) {
   thread_local MeshletScratch s;
   if (s.local.size() < positions.size()) s.local.assign(positions.size(), -1);
+  s.local_placed.assign(placed.size(), -1);
   s.used.clear();
   s.indices.resize(3 * triangles->size());
   for (std::size_t t = 0; t < triangles->size(); ++t)
     for (int k = 0; k < 3; ++k) {
-      const std::size_t v = std::size_t((*triangles)[t][std::size_t(k)]);
-      if (s.local[v] < 0) s.local[v] = std::int32_t(s.used.size()), s.used.push_back(std::int32_t(v));
-      s.indices[3 * t + std::size_t(k)] = unsigned(s.local[v]);
+      const std::int32_t v = (*triangles)[t][std::size_t(k)];
+      std::int32_t& l = v >= 0 ? s.local[std::size_t(v)] : s.local_placed[std::size_t(-1 - v)];
+      if (l < 0) l = std::int32_t(s.used.size()), s.used.push_back(v);
+      s.indices[3 * t + std::size_t(k)] = unsigned(l);
     }
   s.local_positions.resize(s.used.size());
   for (std::size_t i = 0; i < s.used.size(); ++i) {
-    s.local_positions[i] = positions[std::size_t(s.used[i])];
-    s.local[std::size_t(s.used[i])] = -1;
+    const std::int32_t v = s.used[i];
+    s.local_positions[i] = v >= 0 ? positions[std::size_t(v)] : placed[std::size_t(-1 - v)];
+    if (v >= 0) s.local[std::size_t(v)] = -1;
   }
   const std::size_t max_triangles = std::size_t(std::clamp(cluster_triangles / 4 * 4, 4, 512));
   const std::size_t max_vertices = 255;
@@ -182,11 +191,13 @@ std::vector<std::int32_t> meshlet_parts(const JoinedView<Vec3f>& positions, std:
 // error at 50k-100k on the bunny against 1.14x) but serialised the threads on
 // its one random state: the build took 6.7x a whole meshopt_simplify to 1 %
 // against 5.0x (same run).
+// The group's placed vertices, if it holds any still (-1 - i), are read from
+// its added_positions.
 void split_group(const JoinedView<Vec3f>& positions, int cluster_triangles, SplitGroup* g) {
   std::vector<Triangle>& triangles = g->simplified.triangles;
   g->parts = 1;
   if (triangles.size() > std::size_t(cluster_triangles))
-    g->part = meshlet_parts(positions, &triangles, cluster_triangles, &g->parts);
+    g->part = meshlet_parts(positions, g->simplified.added_positions, &triangles, cluster_triangles, &g->parts);
   else
     g->part.assign(triangles.size(), 0);
 }
@@ -363,24 +374,55 @@ struct Shared {
   Shared() = default;
   Shared(const Shared&) = delete;  // the views point into it
 
-  // A group's new vertices into the shared arrays and its triangles onto
-  // their indices; each is its own weld, unlocked.
-  void take_added(SimplifiedGroup* g) {
-    if (g->added_positions.empty()) return;
+  // The mesh's own vertices alone: what blocks that run side by side read,
+  // while others' placed vertices join the shared arrays.
+  ArrayView<Vec3f> mesh_positions, mesh_normals;
+  ArrayView<Rgb> mesh_colors;
+
+  // A group's placed vertices into the shared arrays, and `triangles` (-1 - i
+  // for placed vertex i) onto their indices; each is its own weld, unlocked.
+  void take_placed(std::vector<Vec3f>* placed_positions, std::vector<Vec3f>* placed_normals,
+                   std::vector<Rgb>* placed_colors, Triangle* triangles, std::size_t count) {
+    if (placed_positions->empty()) return;
     const std::int32_t first = std::int32_t(positions.size());
-    added_positions.insert(added_positions.end(), g->added_positions.begin(), g->added_positions.end());
-    added_normals.insert(added_normals.end(), g->added_normals.begin(), g->added_normals.end());
-    added_colors.insert(added_colors.end(), g->added_colors.begin(), g->added_colors.end());
-    for (std::size_t i = 0; i < g->added_positions.size(); ++i) weld.push_back(first + std::int32_t(i));
+    added_positions.insert(added_positions.end(), placed_positions->begin(), placed_positions->end());
+    added_normals.insert(added_normals.end(), placed_normals->begin(), placed_normals->end());
+    added_colors.insert(added_colors.end(), placed_colors->begin(), placed_colors->end());
+    for (std::size_t i = 0; i < placed_positions->size(); ++i) weld.push_back(first + std::int32_t(i));
     locked.resize(weld.size(), 0);
     vertex_group.resize(weld.size(), -1);
-    for (Triangle& t : g->triangles)
-      for (std::int32_t& v : t)
+    for (std::size_t t = 0; t < count; ++t)
+      for (std::int32_t& v : triangles[t])
         if (v < 0) v = first - 1 - v;
-    g->added_positions = {};
-    g->added_normals = {};
-    g->added_colors = {};
+    *placed_positions = {};
+    *placed_normals = {};
+    *placed_colors = {};
   }
+  void take_added(SimplifiedGroup* g) {
+    take_placed(&g->added_positions, &g->added_normals, &g->added_colors, g->triangles.data(), g->triangles.size());
+  }
+};
+
+// What a block's rounds work with besides the shared tables: their threads,
+// the marks they set a vertex at a time (-1 for every vertex between uses),
+// and what they read. Blocks that run side by side (a lane each) read the
+// mesh's own vertices only, and hold the vertices their collapses place
+// until the block is committed, in block order: the same numbers as one
+// block after the other.
+struct Lane {
+  int threads = 1;
+  std::vector<std::int32_t>* marks = nullptr;
+  SimplifyInput input;
+  JoinedView<Vec3f> positions;
+  bool holds_placed = false;
+};
+
+// A group's placed vertices, held back: its triangles [first, end) of the
+// block's, which name them -1 - i.
+struct HeldPlaced {
+  std::uint32_t first = 0, end = 0;
+  std::vector<Vec3f> positions, normals;
+  std::vector<Rgb> colors;
 };
 
 // One block's clusters while its rounds run. Clusters [0, seeds) came in
@@ -393,6 +435,8 @@ struct Block {
   std::size_t seeds = 0;
   std::vector<std::int32_t> active;
   int round = 1;                 // the next DAG round
+  std::vector<HeldPlaced> held;  // in group order, where its lane holds them
+  double simplified = 0;         // triangles its groups took in, for progress
 };
 
 // A cluster into `b` as a seed, from `from`'s cluster c.
@@ -448,7 +492,7 @@ void add_group(Shared& s, const std::vector<std::int32_t>& members, SplitGroup& 
 // group, clustered with its topology free but no piece lost, down to about
 // that many. Cuts above this step are untouched, so they stay as sound as
 // the full mesh.
-void finish_top(Shared& s, Block* b) {
+void finish_top(Shared& s, Lane& lane, Block* b) {
   ClusterHierarchy& h = b->h;
   std::vector<Triangle> tris;
   for (std::int32_t c : b->active) {
@@ -460,9 +504,9 @@ void finish_top(Shared& s, Block* b) {
   }
   if (tris.size() <= kCoarsestTriangles || b->round >= 255) return;
   SplitGroup top;
-  top.simplified = cluster_group(tris, kCoarsestTriangles, s.input, ClusterSoundness::kPiecesOnly);
+  top.simplified = cluster_group(tris, kCoarsestTriangles, lane.input, ClusterSoundness::kPiecesOnly);
   if (top.simplified.triangles.size() >= tris.size()) return;
-  split_group(s.positions, s.options->cluster_triangles, &top);
+  split_group(lane.positions, s.options->cluster_triangles, &top);
   std::vector<std::int32_t> next;
   add_group(s, b->active, top, b, &next);
   b->active = std::move(next);
@@ -473,7 +517,7 @@ void finish_top(Shared& s, Block* b) {
 // simplified to about half and cut into new clusters, until no group
 // simplifies or one cluster is left; at the `top`, finish_top. Vertices
 // locked at 2 stay locked.
-void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
+void run_rounds(Shared& s, Lane& lane, Block* b, int rounds = 255, bool top = false) {
   const ClusterOptions& options = *s.options;
   ClusterHierarchy& h = b->h;
   std::vector<std::int32_t>& active = b->active;
@@ -482,7 +526,7 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
     int group_count = 1;
     std::vector<std::int32_t> group_of(active.size(), 0);
     if (active.size() > std::size_t(options.group_clusters))
-      group_of = partition_graph(cluster_graph(h, active, s.weld, &s.vertex_group), options.group_clusters, &group_count);
+      group_of = partition_graph(cluster_graph(h, active, s.weld, lane.marks), options.group_clusters, &group_count);
     std::vector<std::vector<std::int32_t>> members;
     members.resize(std::size_t(group_count));
     for (std::size_t i = 0; i < active.size(); ++i) members[std::size_t(group_of[i])].push_back(active[i]);
@@ -495,7 +539,7 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
         for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t)
           for (std::int32_t v : h.triangles[t]) {
             const std::size_t w = std::size_t(s.weld[std::size_t(v)]);
-            std::int32_t& owner = s.vertex_group[w];
+            std::int32_t& owner = (*lane.marks)[w];
             if (owner == -1) owner = std::int32_t(g), touched.push_back(std::int32_t(w));
             else if (owner != std::int32_t(g) && s.locked[w] == 0) s.locked[w] = 1;
           }
@@ -506,7 +550,7 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
     // each cut into clusters.
     std::vector<SplitGroup> result(members.size());
     std::vector<std::size_t> before(members.size(), 0);
-    on_threads(members.size(), s.threads, [&](std::size_t g) {
+    on_threads(members.size(), lane.threads, [&](std::size_t g) {
       std::vector<Triangle> tris;
       for (std::int32_t c : members[g]) {
         const Cluster& cl = h.clusters[std::size_t(c)];
@@ -519,10 +563,10 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
       const double reduction = b->round == 1 ? options.first_reduction : options.reduction;
       const std::size_t target = std::size_t(std::ceil(double(tris.size()) * reduction));
       SimplifiedGroup& simplified = result[g].simplified;
-      simplified = simplify_group(tris, target, s.input);
+      simplified = simplify_group(tris, target, lane.input);
       // Folded: collapses that only handles left room for dragged the
       // surface across the group. Lighter targets, else a stall.
-      const float radius = points_sphere(s.positions, tris.data(), tris.size()).radius;
+      const float radius = points_sphere(lane.positions, tris.data(), tris.size()).radius;
       for (double lighter : {0.5 * (1 + reduction), options.stall, 1.0}) {
         if (!folded(simplified, radius)) break;
         if (lighter == 1.0) {
@@ -530,25 +574,25 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
           simplified.triangles = tris;
           break;
         }
-        simplified = simplify_group(tris, std::size_t(std::ceil(double(tris.size()) * lighter)), s.input);
+        simplified = simplify_group(tris, std::size_t(std::ceil(double(tris.size()) * lighter)), lane.input);
       }
       if (double(simplified.triangles.size()) > options.stall * double(tris.size())) {
         // Stalled: collapses cannot remove what is left (handles, mostly).
         // Clustering the group as it came in, instead.
-        simplified = cluster_group(tris, target, s.input);
+        simplified = cluster_group(tris, target, lane.input);
       }
     });
     std::vector<std::uint8_t> simplifies(members.size(), 0);
     for (std::size_t g = 0; g < members.size(); ++g) {
       const std::size_t kept = result[g].simplified.triangles.size();
       simplifies[g] = kept > 0 && double(kept) <= options.stall * double(before[g]);
-      if (simplifies[g]) s.take_added(&result[g].simplified);
+      if (simplifies[g] && !lane.holds_placed) s.take_added(&result[g].simplified);
     }
-    on_threads(members.size(), s.threads, [&](std::size_t g) {
-      if (simplifies[g]) split_group(s.positions, options.cluster_triangles, &result[g]);
+    on_threads(members.size(), lane.threads, [&](std::size_t g) {
+      if (simplifies[g]) split_group(lane.positions, options.cluster_triangles, &result[g]);
     });
     for (std::int32_t v : touched) {
-      s.vertex_group[std::size_t(v)] = -1;
+      (*lane.marks)[std::size_t(v)] = -1;
       if (s.locked[std::size_t(v)] == 1) s.locked[std::size_t(v)] = 0;
     }
 
@@ -557,20 +601,29 @@ void run_rounds(Shared& s, Block* b, int rounds = 255, bool top = false) {
     std::vector<std::int32_t> next;
     bool progress = false;
     for (std::size_t g = 0; g < members.size(); ++g) {
-      s.simplified += double(before[g]);
+      b->simplified += double(before[g]);
       const bool stalled = result[g].parts == 0;
       if (stalled) {
         next.insert(next.end(), members[g].begin(), members[g].end());
         continue;
       }
       progress = true;
+      const std::uint32_t first = std::uint32_t(h.triangles.size());
       add_group(s, members[g], result[g], b, &next);
+      SimplifiedGroup& made = result[g].simplified;
+      if (!made.added_positions.empty())
+        b->held.push_back({first, std::uint32_t(h.triangles.size()), std::move(made.added_positions),
+                           std::move(made.added_normals), std::move(made.added_colors)});
     }
-    if (options.progress) options.progress(std::min(1.0, s.simplified / s.expected));
+    if (!lane.holds_placed) {
+      s.simplified += b->simplified;
+      b->simplified = 0;
+      if (options.progress) options.progress(std::min(1.0, s.simplified / s.expected));
+    }
     active = std::move(next);
     if (!progress) break;
   }
-  if (top) finish_top(s, b);
+  if (top) finish_top(s, lane, b);
 }
 
 // Phase 4: a block's finished clusters (those with a parent, or all of them
@@ -712,6 +765,124 @@ std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vect
   return starts;
 }
 
+// Phase 2a: block [begin, end) of the full triangles, its first round: cut
+// into clusters in runs of at most kSmallestRun along the block's longest
+// side, as the blocks were cut, and by size, not by core count (the same
+// clusters on any machine); then grouped and simplified.
+Block first_round(Shared& s, Lane& lane, const Triangle* begin, const Triangle* end, int round) {
+  const std::size_t size = std::size_t(end - begin);
+  const std::size_t parts = std::max<std::size_t>(1, (size + kSmallestRun - 1) / kSmallestRun);
+  std::vector<std::size_t> runs(parts + 1);
+  for (std::size_t p = 0; p <= parts; ++p) runs[p] = p * size / parts;
+  SplitGroup full = split_runs(lane.positions, runs, s.options->cluster_triangles, lane.threads,
+                               [begin](std::size_t i) -> const Triangle& { return begin[i]; });
+  Block one;
+  append_clusters(full, -1, 0, &one.h, &one.active);
+  full = SplitGroup();
+  for (const Cluster& c : one.h.clusters)
+    one.sphere.push_back(points_sphere(lane.positions, &one.h.triangles[c.first_triangle], c.triangle_count));
+  one.own_error.assign(one.h.clusters.size(), 0.f);
+  one.seeds = one.h.clusters.size();
+  one.round = round;
+  run_rounds(s, lane, &one, 1);
+  return one;
+}
+
+// Phase 2b: a block whose lane held its placed vertices, committed: they
+// join the shared arrays (numbered as if the blocks had run one after the
+// other), then the block is written.
+void commit_block(Shared& s, Block& b, ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
+  for (HeldPlaced& p : b.held) {
+    if (s.weld.size() + p.positions.size() > s.weld.capacity())
+      throw std::logic_error("cluster hierarchy: more placed vertices than room was made for");
+    s.take_placed(&p.positions, &p.normals, &p.colors, &b.h.triangles[p.first], p.end - p.first);
+  }
+  b.held.clear();
+  s.simplified += b.simplified;
+  b.simplified = 0;
+  if (s.options->progress) s.options->progress(std::min(1.0, s.simplified / s.expected));
+  write_block(b, false, out, carried, spool);
+}
+
+// Phase 2 of a blocked build: every block's first round. Blocks share only
+// the vertices on their borders, locked, so they run side by side, a lane a
+// core: each reads the mesh's own vertices, holds back the vertices it
+// places, and is committed in block order (the serial parts of a block,
+// its cluster graph and partition, then overlap another's collapses: they
+// were a fifth of the stage on one core). A lane never runs more than a few
+// blocks ahead of the commits, so that finished blocks do not pile up.
+void first_pass(Shared& s, Lane& main, const std::vector<Triangle>& triangles, const std::vector<std::size_t>& starts,
+                int round, ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
+  const std::size_t blocks = starts.size() - 1;
+  const std::size_t lane_count = std::min<std::size_t>(std::size_t(std::max(main.threads, 1)), blocks);
+  if (lane_count <= 1) {
+    for (std::size_t b = 0; b < blocks; ++b) {
+      Block one = first_round(s, main, triangles.data() + starts[b], triangles.data() + starts[b + 1], round);
+      commit_block(s, one, out, carried, spool);
+    }
+    return;
+  }
+  // Room for every vertex the pass can place (at most three a triangle), so
+  // that commits never move the tables the lanes read.
+  const std::size_t room = s.weld.size() + 3 * triangles.size();
+  s.weld.reserve(room);
+  s.locked.reserve(room);
+  s.vertex_group.reserve(room);
+  std::vector<std::vector<std::int32_t>> own_marks(lane_count - 1);
+  std::vector<Lane> lanes(lane_count);
+  for (std::size_t l = 0; l < lane_count; ++l) {
+    Lane& lane = lanes[l];
+    lane.threads = 1;
+    lane.holds_placed = true;
+    lane.input = s.input;
+    lane.input.positions = JoinedView<Vec3f>(s.mesh_positions);
+    lane.input.normals = JoinedView<Vec3f>(s.mesh_normals);
+    lane.input.colors = JoinedView<Rgb>(s.mesh_colors);
+    lane.positions = lane.input.positions;
+    if (l == 0) {
+      lane.marks = main.marks;
+    } else {
+      own_marks[l - 1].assign(s.mesh_positions.size(), -1);
+      lane.marks = &own_marks[l - 1];
+    }
+  }
+  const std::size_t window = 2 * lane_count;
+  std::vector<Block> finished(blocks);
+  std::vector<std::uint8_t> ready(blocks, 0);
+  std::size_t next_block = 0, next_commit = 0;
+  std::exception_ptr failure;
+  std::mutex mutex;
+  std::condition_variable changed;
+  auto run = [&](Lane& lane) {
+    for (;;) {
+      std::size_t b;
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        changed.wait(lock, [&] { return failure || next_block >= blocks || next_block < next_commit + window; });
+        if (failure || next_block >= blocks) return;
+        b = next_block++;
+      }
+      try {
+        Block one = first_round(s, lane, triangles.data() + starts[b], triangles.data() + starts[b + 1], round);
+        std::lock_guard<std::mutex> lock(mutex);
+        finished[b] = std::move(one);
+        ready[b] = 1;
+        for (; next_commit < blocks && ready[next_commit]; ++next_commit)
+          commit_block(s, finished[next_commit], out, carried, spool);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!failure) failure = std::current_exception();
+      }
+      changed.notify_all();
+    }
+  };
+  std::vector<std::thread> others;
+  for (std::size_t l = 1; l < lane_count; ++l) others.emplace_back(run, std::ref(lanes[l]));
+  run(lanes[0]);
+  for (std::thread& t : others) t.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
 // The blocked build, one DAG round a pass, as Ponchio's Nexus builds a level
 // at a time. Pass 1 cuts the full mesh into KD-tree blocks (kd_blocks) and
 // makes each block's full-detail clusters; each later pass cuts the active
@@ -720,7 +891,7 @@ std::vector<std::size_t> kd_blocks(const JoinedView<Vec3f>& positions, std::vect
 // block borders are simplified in the next. Each block runs one round with
 // the vertices it shares with other blocks locked, and what is left active
 // goes on; once it fits one block, the rounds run to the top in it.
-ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std::int64_t block_triangles) {
+ClusterHierarchy build_in_blocks(Shared& s, Lane& main, std::vector<Triangle> triangles, std::int64_t block_triangles) {
   const ClusterOptions& options = *s.options;
   std::size_t block = std::max<std::size_t>(std::size_t(block_triangles), 1024);
   ClusterHierarchy out;
@@ -739,33 +910,7 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std
       for (std::size_t b = 0; b < blocks; ++b)
         for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) visit(triangles[i], std::int32_t(b));
     });
-    for (std::size_t b = 0; b < blocks; ++b) {
-      // The block cut into clusters in parts of at most kSmallestRun, on
-      // every core: parts along the block's longest side, as the blocks
-      // were cut (one meshlet walk over a block of 2 M triangles took a
-      // second on one core, the rest waiting). By size, not by core count:
-      // the same clusters on any machine.
-      SplitGroup full;
-      {
-        const std::size_t size = starts[b + 1] - starts[b];
-        const std::size_t parts = std::max<std::size_t>(1, (size + kSmallestRun - 1) / kSmallestRun);
-        std::vector<std::size_t> runs(parts + 1);
-        for (std::size_t p = 0; p <= parts; ++p) runs[p] = p * size / parts;
-        const Triangle* own = triangles.data() + starts[b];
-        full = split_runs(s.positions, runs, options.cluster_triangles, s.threads,
-                          [own](std::size_t i) -> const Triangle& { return own[i]; });
-      }
-      Block one;
-      append_clusters(full, -1, 0, &one.h, &one.active);
-      full = SplitGroup();
-      for (const Cluster& c : one.h.clusters)
-        one.sphere.push_back(points_sphere(s.positions, &one.h.triangles[c.first_triangle], c.triangle_count));
-      one.own_error.assign(one.h.clusters.size(), 0.f);
-      one.seeds = one.h.clusters.size();
-      one.round = round;
-      run_rounds(s, &one, 1);
-      write_block(one, false, &out, &carried, spool);
-    }
+    first_pass(s, main, triangles, starts, round, &out, &carried, spool);
     for (std::uint8_t& l : s.locked) l = 0;
   }
   triangles = std::vector<Triangle>();
@@ -775,7 +920,7 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std
 
     if (left <= block || carried.h.clusters.size() <= std::size_t(options.group_clusters) || round >= 254) {
       carried.round = round;
-      run_rounds(s, &carried, 255, true);
+      run_rounds(s, main, &carried, 255, true);
       write_block(carried, true, &out, nullptr, spool);
       out.spool = options.spool;
       return out;
@@ -792,7 +937,7 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std
     std::iota(all.begin(), all.end(), 0);
     int parts = 1;
     const int per_block = int(std::max<std::size_t>(2, block * n / left));
-    const std::vector<std::int32_t> part = partition_graph(cluster_graph(carried.h, all, s.weld, &s.vertex_group), per_block, &parts);
+    const std::vector<std::int32_t> part = partition_graph(cluster_graph(carried.h, all, s.weld, main.marks), per_block, &parts);
     std::vector<std::size_t> starts(std::size_t(parts) + 1, 0);
     for (std::int32_t p : part) ++starts[std::size_t(p) + 1];
     for (std::size_t b = 0; b < std::size_t(parts); ++b) starts[b + 1] += starts[b];
@@ -815,7 +960,7 @@ ClusterHierarchy build_in_blocks(Shared& s, std::vector<Triangle> triangles, std
       Block one;
       for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) add_seed(carried, order[i], &one);
       one.round = round;
-      run_rounds(s, &one, 1);
+      run_rounds(s, main, &one, 1);
       write_block(one, false, &out, &next, spool);
     }
     carried = std::move(next);
@@ -902,12 +1047,20 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
   s.locked.assign(positions.size(), 0);
   s.input.locked = &s.locked;
   s.vertex_group.assign(positions.size(), -1);
+  s.mesh_positions = positions;
+  s.mesh_normals = normals;
+  s.mesh_colors = colors;
+  Lane main;
+  main.threads = s.threads;
+  main.marks = &s.vertex_group;
+  main.input = s.input;
+  main.positions = s.positions;
   s.error_floor = 1e-7f * std::max(diagonal, 1e-30f);
   s.expected = 2.0 * double(triangles.size());
 
   ClusterHierarchy h;
   if (const std::int64_t block = block_triangles_for(options.block_triangles, triangles.size())) {
-    h = build_in_blocks(s, std::move(triangles), block);
+    h = build_in_blocks(s, main, std::move(triangles), block);
   } else {
     // In core: the whole mesh is one block.
     Block all;
@@ -926,7 +1079,7 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
       all.sphere.push_back(points_sphere(positions, &all.h.triangles[c.first_triangle], c.triangle_count));
     all.own_error.assign(all.h.clusters.size(), 0.f);
     all.seeds = all.h.clusters.size();
-    run_rounds(s, &all, 255, true);
+    run_rounds(s, main, &all, 255, true);
     h = std::move(all.h);
   }
   h.pages = cluster_pages(h);
