@@ -804,30 +804,34 @@ void commit_block(Shared& s, Block& b, ClusterHierarchy* out, Block* carried, Tr
   write_block(b, false, out, carried, spool);
 }
 
-// Phase 2 of a blocked build: every block's first round. Blocks share only
-// the vertices on their borders, locked, so they run side by side, a lane a
-// core: each reads the mesh's own vertices, holds back the vertices it
-// places, and is committed in block order (the serial parts of a block,
-// its cluster graph and partition, then overlap another's collapses: they
-// were a fifth of the stage on one core). A lane never runs more than a few
-// blocks ahead of the commits, so that finished blocks do not pile up.
-void first_pass(Shared& s, Lane& main, const std::vector<Triangle>& triangles, const std::vector<std::size_t>& starts,
-                int round, ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
-  const std::size_t blocks = starts.size() - 1;
+// One round of every block of a pass: `make(lane, b)` makes block b's.
+// Blocks share only the vertices on their borders, locked, so they run side
+// by side, a lane a core: each reads the vertices there were when the pass
+// began, holds back the vertices it places, and is committed in block order
+// (the serial parts of a block, its cluster graph and partition, then
+// overlap another's collapses: they were a fifth of the stage on one core).
+// A lane never runs more than a few blocks ahead of the commits, so that
+// finished blocks do not pile up. `pass_triangles`: the pass's triangles.
+template <class Make>
+void blocks_side_by_side(Shared& s, Lane& main, std::size_t blocks, std::size_t pass_triangles, Make make,
+                         ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
   const std::size_t lane_count = std::min<std::size_t>(std::size_t(std::max(main.threads, 1)), blocks);
   if (lane_count <= 1) {
     for (std::size_t b = 0; b < blocks; ++b) {
-      Block one = first_round(s, main, triangles.data() + starts[b], triangles.data() + starts[b + 1], round);
+      Block one = make(main, b);
       commit_block(s, one, out, carried, spool);
     }
     return;
   }
   // Room for every vertex the pass can place (at most three a triangle), so
   // that commits never move the tables the lanes read.
-  const std::size_t room = s.weld.size() + 3 * triangles.size();
-  s.weld.reserve(room);
-  s.locked.reserve(room);
-  s.vertex_group.reserve(room);
+  const std::size_t room = 3 * pass_triangles;
+  s.weld.reserve(s.weld.size() + room);
+  s.locked.reserve(s.locked.size() + room);
+  s.vertex_group.reserve(s.vertex_group.size() + room);
+  s.added_positions.reserve(s.added_positions.size() + room);
+  if (!s.mesh_normals.empty()) s.added_normals.reserve(s.added_normals.size() + room);
+  if (!s.mesh_colors.empty()) s.added_colors.reserve(s.added_colors.size() + room);
   std::vector<std::vector<std::int32_t>> own_marks(lane_count - 1);
   std::vector<Lane> lanes(lane_count);
   for (std::size_t l = 0; l < lane_count; ++l) {
@@ -835,14 +839,14 @@ void first_pass(Shared& s, Lane& main, const std::vector<Triangle>& triangles, c
     lane.threads = 1;
     lane.holds_placed = true;
     lane.input = s.input;
-    lane.input.positions = JoinedView<Vec3f>(s.mesh_positions);
-    lane.input.normals = JoinedView<Vec3f>(s.mesh_normals);
-    lane.input.colors = JoinedView<Rgb>(s.mesh_colors);
+    lane.input.positions = s.input.positions.frozen();
+    lane.input.normals = s.input.normals.frozen();
+    lane.input.colors = s.input.colors.frozen();
     lane.positions = lane.input.positions;
     if (l == 0) {
       lane.marks = main.marks;
     } else {
-      own_marks[l - 1].assign(s.mesh_positions.size(), -1);
+      own_marks[l - 1].assign(s.vertex_group.size(), -1);
       lane.marks = &own_marks[l - 1];
     }
   }
@@ -863,7 +867,7 @@ void first_pass(Shared& s, Lane& main, const std::vector<Triangle>& triangles, c
         b = next_block++;
       }
       try {
-        Block one = first_round(s, lane, triangles.data() + starts[b], triangles.data() + starts[b + 1], round);
+        Block one = make(lane, b);
         std::lock_guard<std::mutex> lock(mutex);
         finished[b] = std::move(one);
         ready[b] = 1;
@@ -910,7 +914,12 @@ ClusterHierarchy build_in_blocks(Shared& s, Lane& main, std::vector<Triangle> tr
       for (std::size_t b = 0; b < blocks; ++b)
         for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) visit(triangles[i], std::int32_t(b));
     });
-    first_pass(s, main, triangles, starts, round, &out, &carried, spool);
+    blocks_side_by_side(
+        s, main, blocks, triangles.size(),
+        [&](Lane& lane, std::size_t b) {
+          return first_round(s, lane, triangles.data() + starts[b], triangles.data() + starts[b + 1], round);
+        },
+        &out, &carried, spool);
     for (std::uint8_t& l : s.locked) l = 0;
   }
   triangles = std::vector<Triangle>();
@@ -956,13 +965,16 @@ ClusterHierarchy build_in_blocks(Shared& s, Lane& main, std::vector<Triangle> tr
         }
     });
     Block next;
-    for (std::size_t b = 0; b < blocks; ++b) {
-      Block one;
-      for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) add_seed(carried, order[i], &one);
-      one.round = round;
-      run_rounds(s, main, &one, 1);
-      write_block(one, false, &out, &next, spool);
-    }
+    blocks_side_by_side(
+        s, main, blocks, left,
+        [&](Lane& lane, std::size_t b) {
+          Block one;
+          for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) add_seed(carried, order[i], &one);
+          one.round = round;
+          run_rounds(s, lane, &one, 1);
+          return one;
+        },
+        &out, &next, spool);
     carried = std::move(next);
     for (std::uint8_t& l : s.locked) l = 0;
   }
