@@ -1,11 +1,11 @@
 #include "core/vertex_order.h"
 
 #include "core/morton.h"
-
-#include <parallel/algorithm>
+#include "core/sort_on_cores.h"
 
 #include <algorithm>
 #include <cstdint>
+#include <thread>
 #include <vector>
 
 namespace scan2lod {
@@ -52,7 +52,7 @@ void order_vertices(TriangleMesh* mesh) {
   const bool normals = !mesh->normals.empty(), colors = !mesh->colors.empty();
   // A total order on the values (the number last, for vertices equal in
   // all of them): the same on any core count.
-  __gnu_parallel::sort(keys.begin(), keys.end(), [&](const Key& a, const Key& b) {
+  sort_on_cores(keys.begin(), keys.end(), int(std::thread::hardware_concurrency()), [&](const Key& a, const Key& b) {
     if (a.code != b.code) return a.code < b.code;
     const std::size_t u = std::size_t(a.vertex), w = std::size_t(b.vertex);
     if (mesh->positions[u] != mesh->positions[w]) return before(mesh->positions[u], mesh->positions[w]);

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/morton.h"
+#include "core/sort_on_cores.h"
 #include "lod/cluster_partition.h"
 #include "lod/group_clustering.h"
 #include "lod/group_simplify.h"
@@ -45,25 +46,6 @@ struct Sphere {
 
 // Phase 1: one id per position (the smallest vertex index there), so that
 // split attributes do not split adjacency or locks.
-// Sorts [first, last) by `less`, a total order (so the result is the same on
-// any core count): on two threads when asked and worth it, halves sorted
-// apart and merged. Not __gnu_parallel::sort: its OpenMP workers spin for a
-// while after each sort, and the rounds call this hundreds of times between
-// their own threads' work (11-13 % of a bunny build's CPU time, spinning).
-template <class It, class Less>
-void sort_on_cores(It first, It last, int threads, Less less) {
-  const auto n = last - first;
-  if (threads < 2 || n < (1 << 16)) {
-    std::sort(first, last, less);
-    return;
-  }
-  const It middle = first + n / 2;
-  std::thread other([&] { std::sort(first, middle, less); });
-  std::sort(middle, last, less);
-  other.join();
-  std::inplace_merge(first, middle, last, less);
-}
-
 std::vector<std::int32_t> weld_positions(ArrayView<Vec3f> positions, int threads) {
   std::vector<std::int32_t> order(positions.size()), weld(positions.size());
   std::iota(order.begin(), order.end(), 0);
