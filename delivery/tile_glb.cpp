@@ -77,7 +77,7 @@ struct Accessors {
   int position = -1, normal = -1, color = -1, indices = -1;
 };
 
-Stream position_stream(const VertexArray& v, const LocalMesh& m, const TileGrid& grid, bool quantize,
+Stream position_stream(const VertexArray& v, const LocalMesh& m, const PositionGrid& grid, bool quantize,
                        json* min, json* max) {
   Stream s;
   s.count = m.source.size();
@@ -237,17 +237,7 @@ json buffer_views(const std::vector<Stream>& streams, bool meshopt, std::vector<
 
 }  // namespace
 
-TileGrid tile_grid(const Aabb& box) {
-  TileGrid g;
-  if (box.empty()) return g;
-  g.centre = (box.min + box.max) * 0.5f;
-  const float half = 0.5f * box.extent().maxCoeff();
-  // Slightly over the half side, so that rounding never leaves [-32767, 32767].
-  g.scale = half > 0 ? half * (1 + 1e-5f) : 1.f;
-  return g;
-}
-
-TileGlb tile_glb(const VertexArray& vertices, const std::vector<Triangle>& triangles, const TileGrid& grid,
+TileGlb tile_glb(const VertexArray& vertices, const std::vector<Triangle>& triangles, const PositionGrid& grid,
                  const TileGlbOptions& options) {
   assert(!triangles.empty());
   const LocalMesh m = local_mesh(triangles);

@@ -18,6 +18,7 @@
 #pragma once
 
 #include "core/types.h"
+#include "io/gltf_file.h"
 #include "lod/mc_octree.h"
 
 #include <cstdint>
@@ -26,16 +27,6 @@
 
 namespace scan2lod {
 
-// The grid every tile's positions are quantized on: position = centre +
-// scale * stored / 32767 (in the model's frame).
-struct TileGrid {
-  Vec3f centre = Vec3f::Zero();
-  float scale = 1;
-  float step() const { return scale / 32767.f; }
-};
-
-// The grid for positions inside `box` (the step is 1/65534 of its longest side).
-TileGrid tile_grid(const Aabb& box);
 
 struct TileGlbOptions {
   bool quantize = true;  // KHR_mesh_quantization; false: 32-bit floats
@@ -51,7 +42,7 @@ struct TileGlb {
 // The .glb of `triangles` (into `vertices`; only the vertices they use are
 // written). `triangles` must not be empty and must name vertices of
 // `vertices`; normals and colours are written when `vertices` has them.
-TileGlb tile_glb(const VertexArray& vertices, const std::vector<Triangle>& triangles, const TileGrid& grid,
+TileGlb tile_glb(const VertexArray& vertices, const std::vector<Triangle>& triangles, const PositionGrid& grid,
                  const TileGlbOptions& options);
 
 }  // namespace scan2lod

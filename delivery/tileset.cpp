@@ -92,7 +92,7 @@ struct Staging {
 }  // namespace
 
 float tileset_quantization_step(const TileTree& tree, const TileGlbOptions& options) {
-  return options.quantize ? tile_grid(tree.bounds).step() : 0.f;
+  return options.quantize ? position_grid(tree.bounds).step() : 0.f;
 }
 
 std::string tileset_json(const TileTree& tree, const Vec3d& origin, float quantization_step,
@@ -138,7 +138,7 @@ TilesetReport write_tileset(const LodModel& model, const std::string& dir, const
   if (!fs::create_directories(staging.path / "tiles", ec) || ec)
     throw InputError(dir, "cannot create the folder " + staging.path.string() + ": " + ec.message());
 
-  const TileGrid grid = tile_grid(tree.bounds);
+  const PositionGrid grid = position_grid(tree.bounds);
   std::size_t written = 0, with_content = 0;
   for (const Tile& t : tree.tiles) with_content += t.has_content();
   for (std::size_t i = 0; i < tree.tiles.size(); ++i) {

@@ -19,6 +19,17 @@
 #include <optional>
 
 namespace scan2lod {
+
+PositionGrid position_grid(const Aabb& box) {
+  PositionGrid g;
+  if (box.empty()) return g;
+  g.centre = (box.min + box.max) * 0.5f;
+  const float half = 0.5f * box.extent().maxCoeff();
+  // Slightly over the half side, so that rounding never leaves [-32767, 32767].
+  g.scale = half > 0 ? half * (1 + 1e-5f) : 1.f;
+  return g;
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -77,29 +88,11 @@ class BufferBuilder {
   tinygltf::Model* model_;
 };
 
-// Positions as normalized int16 under translation + uniform scale: uniform, so
-// that normals need no correction and the shape keeps its proportions.
-struct Quantization {
-  Vec3f centre = Vec3f::Zero();
-  float scale = 1;
-};
-
-Quantization quantization_for(const std::vector<Vec3f>& positions) {
-  const Aabb box = bounds(positions);
-  Quantization q;
-  if (box.empty()) return q;
-  q.centre = (box.min + box.max) * 0.5f;
-  const float half = 0.5f * box.extent().maxCoeff();
-  // Slightly over the half side, so that rounding never leaves [-32767, 32767].
-  q.scale = half > 0 ? half * (1 + 1e-6f) : 1.f;
-  return q;
-}
-
 // The node's translation: the file frame's origin, plus the quantization's
 // centre (position = centre + scale * stored, so the node's T * S maps the
 // stored values to origin + position); summed in double, as the JSON keeps it.
 // None for float positions without an origin, as before origins existed.
-std::vector<double> node_translation(const GltfOptions& options, const Quantization& q) {
+std::vector<double> node_translation(const GltfOptions& options, const PositionGrid& q) {
   if (!options.quantize && options.origin == Vec3d::Zero()) return {};
   const Vec3d t = options.quantize ? Vec3d(options.origin + q.centre.cast<double>()) : options.origin;
   return {t.x(), t.y(), t.z()};
@@ -114,7 +107,7 @@ struct VertexAccessors {
   int position = -1, normal = -1, color = -1;
 };
 
-int add_positions(BufferBuilder& b, const std::vector<Vec3f>& p, const GltfOptions& options, const Quantization& q) {
+int add_positions(BufferBuilder& b, const std::vector<Vec3f>& p, const GltfOptions& options, const PositionGrid& q) {
   const std::size_t n = p.size();
   std::vector<double> min(3, 0), max(3, 0);
   if (!options.quantize) {
@@ -219,7 +212,7 @@ tinygltf::Model build_model(const TriangleMesh& vertices, const std::vector<Gltf
   std::size_t bytes = vertices.positions.size() * 32 + 64;  // the widest attributes, padded
   for (const GltfLevel& level : levels) bytes += level.triangles->size() * 12 + 4;
   b.reserve(bytes);
-  const Quantization q = quantization_for(vertices.positions);
+  const PositionGrid q = position_grid(bounds(vertices.positions));
   VertexAccessors va;
   va.position = add_positions(b, vertices.positions, options, q);
   if (!vertices.normals.empty()) va.normal = add_normals(b, vertices.normals, options);

@@ -23,6 +23,20 @@
 
 namespace scan2lod {
 
+// The grid quantized positions are stored on (KHR_mesh_quantization, as
+// normalized int16): position = centre + scale * stored / 32767 in the
+// model's frame. Uniform, so that normals need no correction and the shape
+// keeps its proportions.
+struct PositionGrid {
+  Vec3f centre = Vec3f::Zero();
+  float scale = 1;
+  float step() const { return scale / 32767.f; }
+};
+
+// The grid for positions inside `box`: its step is about 1/65534 of the
+// box's longest side.
+PositionGrid position_grid(const Aabb& box);
+
 struct GltfOptions {
   bool quantize = true;        // KHR_mesh_quantization; false: 32-bit floats
   std::string generator;       // asset.generator, e.g. "scan2lod 0.1.0"
