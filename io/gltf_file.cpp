@@ -26,7 +26,7 @@ PositionGrid position_grid(const Aabb& box) {
   g.centre = (box.min + box.max) * 0.5f;
   const float half = 0.5f * box.extent().maxCoeff();
   // Slightly over the half side, so that rounding never leaves [-32767, 32767].
-  g.scale = half > 0 ? half * (1 + 1e-5f) : 1.f;
+  g.scale = half > 0 ? half * (1 + 1e-6f) : 1.f;
   return g;
 }
 
