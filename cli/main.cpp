@@ -48,15 +48,8 @@ int main(int argc, char** argv) {
     // CLI11's own codes (104-114) say which parse rule failed; users and
     // scripts get one documented code for every usage error.
     return app.exit(e) == 0 ? kExitOk : kExitUsage;
-  } catch (const scan2lod::InputError& e) {
-    std::fprintf(stderr, "scan2lod: error: %s\n", e.what());
-    return kExitInput;
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "scan2lod: error: out of memory\n");
-    return kExitMemory;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "scan2lod: internal error: %s\n", e.what());
-    return kExitInternal;
+  } catch (...) {
+    return print_error();
   }
   return kExitOk;
 }

@@ -1,5 +1,7 @@
 #include "cli/terminal.h"
 
+#include "cli/exit_codes.h"
+#include "core/error.h"
 #include "core/progress.h"
 
 #include <unistd.h>
@@ -8,6 +10,9 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <new>
 
 namespace scan2lod::cli {
 namespace {
@@ -38,8 +43,21 @@ void Warnings::operator()(const std::string& text) {
   else warn(text);
 }
 
-void install_terminal_progress() {
-  if (!isatty(fileno(stderr))) return;
+namespace {
+
+// Whether the process that started this one (an MPI launcher) writes its
+// stderr to a terminal: the rank's own stderr is a pipe to it.
+bool parent_stderr_is_terminal() {
+  std::error_code ec;
+  const std::string target =
+      std::filesystem::read_symlink("/proc/" + std::to_string(getppid()) + "/fd/2", ec).string();
+  return !ec && (target.rfind("/dev/pts/", 0) == 0 || target.rfind("/dev/tty", 0) == 0);
+}
+
+}  // namespace
+
+void install_terminal_progress(bool behind_launcher) {
+  if (behind_launcher ? !parent_stderr_is_terminal() : !isatty(fileno(stderr))) return;
   set_progress_sink([](const std::string& label, double fraction, bool finished) {
     // The time left, from the pace so far of this label's work.
     using clock = std::chrono::steady_clock;
@@ -58,6 +76,25 @@ void install_terminal_progress() {
                  width - filled, "", int(fraction * 100.0), eta, finished ? "\n" : "");
     std::fflush(stderr);
   });
+}
+
+int print_error(const std::string& rank) {
+  const std::string who = rank.empty() ? "" : " (" + rank + ")";
+  try {
+    throw;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "scan2lod: error%s: %s\n", who.c_str(), e.what());
+    return kExitInput;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "scan2lod: error%s: out of memory\n", who.c_str());
+    return kExitMemory;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "scan2lod: internal error%s: %s\n", who.c_str(), e.what());
+    return kExitInternal;
+  } catch (...) {
+    std::fprintf(stderr, "scan2lod: internal error%s\n", who.c_str());
+    return kExitInternal;
+  }
 }
 
 }  // namespace scan2lod::cli

@@ -32,7 +32,17 @@ class Warnings {
 };
 
 // Draws the library's progress (core/progress.h) as a bar on stderr, only when
-// stderr is a terminal and --quiet was not given.
-void install_terminal_progress();
+// stderr is a terminal and --quiet was not given. Under an MPI launcher a
+// rank's stderr is a pipe to the launcher even when the user watches a
+// terminal: `behind_launcher` asks whether the launcher's (the parent
+// process's) stderr is a terminal instead. (OpenMPI gives the ranks a
+// pseudo-terminal for stdout whatever the launcher's is, so stdout says
+// nothing.)
+void install_terminal_progress(bool behind_launcher = false);
+
+// Prints the error being handled (call it in a catch block) as
+// "scan2lod: error: WHAT" on stderr, naming `rank` when it is not empty, and
+// returns the exit code of its kind (exit_codes.h).
+int print_error(const std::string& rank = "");
 
 }  // namespace scan2lod::cli

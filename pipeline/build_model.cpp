@@ -129,6 +129,7 @@ Reconstruction reconstruct_budgeted(const OrientedPoints* points, const PointSpo
                                " available now; it runs in core for the octree (--structure clusters runs in bricks)");
   }
   if (!report->in_bricks) {
+    release_brick_workers(options.sharing);
     ReconstructOptions in_core = options.reconstruct;
     if (in_core.memory_limit <= 0 && options.memory_bytes > 0) in_core.memory_limit = options.memory_bytes;
     Reconstruction r = reconstruct(*points, in_core);
@@ -140,6 +141,7 @@ Reconstruction reconstruct_budgeted(const OrientedPoints* points, const PointSpo
   bricks.memory_bytes = budget;
   bricks.brick_cubes = options.brick_cubes;
   bricks.points_binned = release;
+  bricks.sharing = options.sharing;
   if (options.octree)
     throw InputError("", (spool ? "the points alone take over a quarter of the budget of " + binary_size(budget)
                                 : "the reconstruction needs about " + binary_size(report->estimated_bytes) +
@@ -239,6 +241,7 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
   BuildProgress& progress = outer ? *outer : *own;
   auto stage = Clock::now();
   Reconstruction r;
+  if (!reconstructs) release_brick_workers(options.sharing);
   if (reconstructs) {
     r = reconstruct_budgeted(points, spool, options, &report, release);
     report.reconstruct = r.stats;
@@ -316,6 +319,15 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
 }
 
 }  // namespace
+
+void serve_build(const BuildOptions& options) {
+  BrickOptions bricks;
+  bricks.work_dir = options.work_dir;
+  bricks.memory_bytes = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
+  bricks.brick_cubes = options.brick_cubes;
+  bricks.sharing = options.sharing;
+  serve_bricks(options.reconstruct, bricks);
+}
 
 LodModel build_model(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,
                      BuildReport* report) {

@@ -36,6 +36,10 @@ struct BuildOptions {
   // block_triangles); 0: blocks of kBlockTriangles above kWholeMeshTriangles,
   // smaller only when the budget cannot hold those.
   std::int64_t cluster_block = 0;
+  // The ranks of an MPI job that share the bricks (distributed/work_sharing.h),
+  // all seeing work_dir at the same path; null: this process alone. On rank
+  // 0 build_model() runs the whole build; the other ranks call serve_build().
+  WorkSharing* sharing = nullptr;
 };
 
 struct BuildReport {
@@ -58,6 +62,12 @@ struct BuildReport {
   // which seconds_numbering is the priority numbering.
   double seconds_read = 0, seconds_reconstruct = 0, seconds_octree = 0, seconds_numbering = 0, seconds_clusters = 0;
 };
+
+// On a rank other than 0 of options.sharing: its share of the build that
+// rank 0 runs with the same options (the bricks it is handed out, if the
+// build goes by bricks); returns when its part is over. It reads no input and
+// writes nothing but bricks in options.work_dir.
+void serve_build(const BuildOptions& options);
 
 // @param[in] inputs  what load_oriented_points() takes
 // Throws InputError for unreadable input, for no surface, for a budget that

@@ -4,6 +4,8 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/stopwatch.h"
+#include "distributed/message.h"
+#include "distributed/work_sharing.h"
 #include "io/atomic_file.h"
 #include "reconstruct/brick_surface.h"
 #include "reconstruct/cube_table.h"
@@ -15,6 +17,7 @@
 
 #include <fcntl.h>
 #include <omp.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -27,6 +30,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <memory>
 #include <unordered_map>
 #include <numeric>
 
@@ -290,6 +294,7 @@ struct Bins {
   PointCensus census;
   std::string path;
   int fd = -1;
+  bool owner = true;  // made the file (rank 0), and removes it
   // No point outside this many world units reaches into a brick, under the
   // normal limits and the relaxed ones of hole closing: the base, or more for
   // the bricks that points of wide spacing reach (listed here).
@@ -302,7 +307,7 @@ struct Bins {
   ~Bins() {
     if (fd >= 0) ::close(fd);
     std::error_code ec;
-    if (!path.empty()) fs::remove(path, ec);
+    if (owner && !path.empty()) fs::remove(path, ec);
   }
   float far(std::uint32_t brick) const {
     const auto it = wide.find(brick);
@@ -497,6 +502,232 @@ std::size_t with_brick_points(const Bins& bins, const BrickPlan& plan, std::uint
   }
 }
 
+
+// ---- passes over the bricks, shared by the ranks --------------------------
+
+// What the passes know of a brick: the cubes asked of it, and what its last
+// run left for its neighbours and for the weld's room.
+struct BrickState {
+  std::vector<std::uint64_t> wanted, followed, requests, border;
+  std::size_t vertices = 0, leaves = 0, triangles = 0;  // of its share, for the weld's room
+  bool colored = false;
+  bool pending = false, done = false;
+};
+
+// A brick's run (or its finished file, resumed), as every rank learns it
+// after the pass.
+struct BrickOutcome {
+  std::uint32_t brick = 0;
+  std::uint64_t vertices = 0, leaves = 0, triangles = 0;
+  bool colored = false;
+  std::vector<std::uint64_t> followed, requests, border;
+};
+
+// Runs a brick with the cubes asked of it, or takes its finished file when
+// that one followed them all, and writes it atomically to `dir`.
+BrickOutcome run_brick(const Bins& bins, const BrickPlan& plan, const ReconstructOptions& options,
+                       const std::string& dir, std::uint32_t brick, const std::vector<std::uint64_t>& wanted,
+                       BrickStats* bs) {
+  const std::string path = brick_path(dir, brick);
+  BrickFile file;
+  const bool resumed = read_brick(path, plan.key, &file) &&
+                       std::includes(file.followed.begin(), file.followed.end(), wanted.begin(), wanted.end());
+  if (resumed) {
+    ++bs->bricks_resumed;
+  } else {
+    // The base halo first; where a value needs more (points of wide
+    // spacing nearby), again with what it needs.
+    const double cubes_per_point = plan.cubes / double(bins.census.count);
+    file.followed = wanted;
+    bs->brick_runs += with_brick_points(bins, plan, brick, plan.halo, bins.far(brick),
+                                        [&](const OrientedPoints& sub) {
+      file.surface = reconstruct_brick(sub, plan.grid, region_of(plan, brick), file.followed,
+                                       cubes_per_point * double(sub.size()), bins.far(brick), options);
+      return double(file.surface.needed_halo);
+    }, &bs->widest_halo);
+    write_brick(path, plan.key, file);
+  }
+  BrickOutcome o;
+  o.brick = brick;
+  o.vertices = file.surface.vertex_edges.size();
+  o.leaves = file.surface.leaf_cubes.size();
+  o.triangles = file.surface.triangles.size();
+  o.colored = !file.surface.colors.empty();
+  o.followed = std::move(file.followed);
+  o.requests = std::move(file.surface.requests);
+  o.border = std::move(file.surface.border_cubes);
+  return o;
+}
+
+// Every rank's outcomes of a pass and the sum of their counts, on every rank.
+std::vector<BrickOutcome> exchange(WorkSharing& sharing, std::vector<BrickOutcome>&& mine, BrickStats* here) {
+  if (sharing.ranks() == 1) return std::move(mine);
+  MessageWriter out;
+  out.put(std::uint64_t(here->brick_runs));
+  out.put(std::uint64_t(here->bricks_resumed));
+  out.put(here->widest_halo);
+  out.put(std::uint64_t(mine.size()));
+  for (const BrickOutcome& o : mine) {
+    out.put(o.brick), out.put(o.vertices), out.put(o.leaves), out.put(o.triangles), out.put(std::uint8_t(o.colored));
+    out.put(o.followed), out.put(o.requests), out.put(o.border);
+  }
+  mine.clear();
+  *here = BrickStats();
+  std::vector<BrickOutcome> all;
+  for (const std::string& bytes : sharing.gather_all(out.bytes())) {
+    MessageReader in(bytes);
+    std::uint64_t runs = 0, resumed = 0, count = 0;
+    double widest = 0;
+    in.get(&runs), in.get(&resumed), in.get(&widest), in.get(&count);
+    here->brick_runs += runs, here->bricks_resumed += resumed, here->widest_halo = std::max(here->widest_halo, widest);
+    for (std::uint64_t k = 0; k < count; ++k) {
+      BrickOutcome o;
+      std::uint8_t colored = 0;
+      in.get(&o.brick), in.get(&o.vertices), in.get(&o.leaves), in.get(&o.triangles), in.get(&colored);
+      in.get(&o.followed), in.get(&o.requests), in.get(&o.border);
+      o.colored = colored != 0;
+      all.push_back(std::move(o));
+    }
+  }
+  return all;
+}
+
+// Phases 2 and 3: bricks run, and run again with the cubes their neighbours'
+// surfaces lead into, until no brick asks another for a cube it lacks. Each
+// pass's bricks are shared among the ranks; between passes every rank holds
+// the same states, so each decides the next pass alike. Margin seeds reach
+// out of a point's own brick, so with a margin every brick whose halo holds
+// points runs; else the bricks that hold points.
+std::map<std::uint32_t, BrickState> follow_bricks(const Bins& bins, const BrickPlan& plan,
+                                                  const ReconstructOptions& options, const std::string& dir,
+                                                  WorkSharing& sharing, BrickStats* bs) {
+  std::map<std::uint32_t, BrickState> bricks;
+  for (std::uint32_t b : bins.bricks) bricks[b].pending = true;
+  if (options.margin > 0)
+    for (std::uint32_t b : bins.bricks) {
+      const int n = plan.bricks_per_axis, r = (options.margin + plan.brick_cubes - 1) / plan.brick_cubes;
+      const int x = int(b) % n, y = int(b) / n % n, z = int(b) / (n * n);
+      for (int dz = std::max(0, z - r); dz <= std::min(n - 1, z + r); ++dz)
+        for (int dy = std::max(0, y - r); dy <= std::min(n - 1, y + r); ++dy)
+          for (int dx = std::max(0, x - r); dx <= std::min(n - 1, x + r); ++dx)
+            bricks[std::uint32_t((dz * n + dy) * n + dx)].pending = true;
+    }
+  Progress progress("bricks", bricks.size());
+  for (;;) {
+    std::vector<std::uint32_t> pending;
+    std::vector<char> first;  // the brick's first run: progress
+    for (auto& [brick, state] : bricks)
+      if (state.pending) state.pending = false, pending.push_back(brick), first.push_back(!state.done);
+    if (pending.empty()) break;
+    std::vector<BrickOutcome> mine;
+    BrickStats here;
+    sharing.share(pending.size(), [&](std::size_t i) {
+      mine.push_back(run_brick(bins, plan, options, dir, pending[i], bricks.at(pending[i]).wanted, &here));
+    }, [&](std::size_t i) {
+      if (first[i]) progress.advance();
+    });
+    for (BrickOutcome& o : exchange(sharing, std::move(mine), &here)) {
+      BrickState& state = bricks.at(o.brick);
+      state.vertices = o.vertices, state.leaves = o.leaves, state.triangles = o.triangles, state.colored = o.colored;
+      state.followed = std::move(o.followed);
+      state.requests = std::move(o.requests);
+      state.border = std::move(o.border);
+      state.done = true;
+    }
+    bs->brick_runs += here.brick_runs;
+    bs->bricks_resumed += here.bricks_resumed;
+    bs->widest_halo = std::max(bs->widest_halo, here.widest_halo);
+    ++bs->follow_passes;
+    // Requests a brick has not met yet make it run again.
+    std::vector<std::pair<std::uint32_t, std::uint64_t>> asked;
+    for (const auto& [brick, state] : bricks)
+      for (std::uint64_t cube : state.requests) asked.push_back({brick_of_cube(plan, cube), cube});
+    for (const auto& [target, cube] : asked) {
+      BrickState& t = bricks[target];
+      if (t.done && (std::binary_search(t.border.begin(), t.border.end(), cube) ||
+                     std::binary_search(t.followed.begin(), t.followed.end(), cube)))
+        continue;
+      if (std::binary_search(t.wanted.begin(), t.wanted.end(), cube)) continue;
+      t.wanted.insert(std::upper_bound(t.wanted.begin(), t.wanted.end(), cube), cube);
+      t.pending = true;
+    }
+  }
+  progress.finish();
+  return bricks;
+}
+
+// ---- the plan sent to the other ranks -------------------------------------
+
+constexpr std::uint64_t kPlanMessage = 0x5332'4c42'504c'414eull;  // a plan follows (else: no bricks)
+
+void put_vector(MessageWriter* out, const Vec3d& v) { out->put(v.x()), out->put(v.y()), out->put(v.z()); }
+void put_vector(MessageWriter* out, const Vec3f& v) { out->put(v.x()), out->put(v.y()), out->put(v.z()); }
+template <class V>
+void get_vector(MessageReader* in, V* v) { in->get(&v->x()), in->get(&v->y()), in->get(&v->z()); }
+
+// Rank 0: the plan and the bins' index (the records stay in points.bins,
+// which every rank reads from the shared work folder).
+void send_plan(WorkSharing& sharing, const BrickPlan& plan, const Bins& bins) {
+  // Written before the other ranks open it: flushed for a shared file system
+  // that makes writes visible to other machines when they reach its server.
+  if (::fsync(bins.fd) != 0) throw InputError(bins.path, "cannot flush the binned points: " + std::string(std::strerror(errno)));
+  MessageWriter out;
+  out.put(kPlanMessage);
+  put_vector(&out, plan.grid.origin);
+  out.put(plan.grid.cube_size), out.put(plan.grid.resolution);
+  out.put(plan.brick_cubes), out.put(plan.bricks_per_axis), out.put(plan.halo), out.put(plan.cubes);
+  out.put(plan.brick_bytes), out.put(plan.weld_bytes), out.put(plan.disk_bytes), out.put(plan.estimated_bytes);
+  out.put(plan.median_spacing), out.put(plan.key);
+  const PointCensus& c = bins.census;
+  out.put(std::uint64_t(c.count));
+  put_vector(&out, c.box.min), put_vector(&out, c.box.max);
+  out.put(std::uint8_t(c.colors)), out.put(std::uint8_t(c.confidence)), out.put(std::uint8_t(c.spacing)), out.put(c.hash);
+  out.put(bins.bricks);
+  std::vector<std::uint64_t> first(bins.first.begin(), bins.first.end());
+  out.put(first);
+  out.put(bins.base), out.put(bins.relaxed_base);
+  std::vector<std::pair<std::uint32_t, std::pair<float, float>>> wide(bins.wide.begin(), bins.wide.end());
+  out.put(std::uint64_t(wide.size()));
+  for (const auto& [brick, reach] : wide) out.put(brick), out.put(reach.first), out.put(reach.second);
+  sharing.broadcast(&out.bytes());
+}
+
+// Another rank: the plan, or false when rank 0 builds without bricks.
+bool receive_plan(WorkSharing& sharing, BrickPlan* plan, Bins* bins) {
+  std::string bytes;
+  sharing.broadcast(&bytes);
+  if (bytes.empty()) return false;
+  MessageReader in(bytes);
+  std::uint64_t kind = 0, count = 0, wide = 0;
+  in.get(&kind);
+  if (kind != kPlanMessage) throw std::runtime_error("rank 0 sent no brick plan");
+  get_vector(&in, &plan->grid.origin);
+  in.get(&plan->grid.cube_size), in.get(&plan->grid.resolution);
+  in.get(&plan->brick_cubes), in.get(&plan->bricks_per_axis), in.get(&plan->halo), in.get(&plan->cubes);
+  in.get(&plan->brick_bytes), in.get(&plan->weld_bytes), in.get(&plan->disk_bytes), in.get(&plan->estimated_bytes);
+  in.get(&plan->median_spacing), in.get(&plan->key);
+  PointCensus& c = bins->census;
+  std::uint8_t colors = 0, confidence = 0, spacing = 0;
+  in.get(&count);
+  c.count = std::size_t(count);
+  get_vector(&in, &c.box.min), get_vector(&in, &c.box.max);
+  in.get(&colors), in.get(&confidence), in.get(&spacing), in.get(&c.hash);
+  c.colors = colors, c.confidence = confidence, c.spacing = spacing;
+  in.get(&bins->bricks);
+  std::vector<std::uint64_t> first;
+  in.get(&first);
+  bins->first.assign(first.begin(), first.end());
+  in.get(&bins->base), in.get(&bins->relaxed_base);
+  in.get(&wide);
+  for (std::uint64_t k = 0; k < wide; ++k) {
+    std::uint32_t brick = 0;
+    float normal = 0, relaxed = 0;
+    in.get(&brick), in.get(&normal), in.get(&relaxed);
+    bins->wide[brick] = {normal, relaxed};
+  }
+  if (!in.done()) throw std::runtime_error("rank 0's brick plan is longer than expected");
+  return true;
+}
 }  // namespace
 
 namespace {
@@ -594,84 +825,14 @@ Reconstruction bricks_from(const PointSource& points, const ReconstructOptions& 
   Bins bins;
   bin_points(points, plan, options, (fs::path(brick_options.work_dir) / "points.bins").string(), &bins);
   if (brick_options.points_binned) brick_options.points_binned();
+  std::unique_ptr<WorkSharing> alone;
+  WorkSharing& sharing = brick_options.sharing ? *brick_options.sharing : *(alone = serial_work_sharing());
+  if (sharing.ranks() > 1) send_plan(sharing, plan, bins);
 
   stats.seconds_index = lap();
 
-  // Phases 2 and 3: bricks run, and run again with the cubes their neighbours'
-  // surfaces lead into, until no brick asks another for a cube it lacks.
-  // Margin seeds reach out of a point's own brick, so with a margin every
-  // brick whose halo holds points runs; else the bricks that hold points.
-  struct State {
-    std::vector<std::uint64_t> wanted, followed, requests, border;
-    std::size_t vertices = 0, leaves = 0, triangles = 0;  // of its share, for the weld's room
-    bool colored = false;
-    bool pending = false, done = false;
-  };
-  std::map<std::uint32_t, State> bricks;
-  for (std::uint32_t b : bins.bricks) bricks[b].pending = true;
-  if (options.margin > 0)
-    for (std::uint32_t b : bins.bricks) {
-      const int n = plan.bricks_per_axis, r = (options.margin + plan.brick_cubes - 1) / plan.brick_cubes;
-      const int x = int(b) % n, y = int(b) / n % n, z = int(b) / (n * n);
-      for (int dz = std::max(0, z - r); dz <= std::min(n - 1, z + r); ++dz)
-        for (int dy = std::max(0, y - r); dy <= std::min(n - 1, y + r); ++dy)
-          for (int dx = std::max(0, x - r); dx <= std::min(n - 1, x + r); ++dx)
-            bricks[std::uint32_t((dz * n + dy) * n + dx)].pending = true;
-    }
   BrickStats bs;
-  const double cubes_per_point = plan.cubes / double(points.census.count);
-  Progress progress("bricks", bricks.size());
-  for (;;) {
-    bool ran = false;
-    for (auto& [brick, state] : bricks) {
-      if (!state.pending) continue;
-      state.pending = false;
-      ran = true;
-      const std::string path = brick_path(dir, brick);
-      BrickFile file;
-      const bool resumed = read_brick(path, plan.key, &file) &&
-                           std::includes(file.followed.begin(), file.followed.end(), state.wanted.begin(),
-                                         state.wanted.end());
-      if (resumed) {
-        ++bs.bricks_resumed;
-      } else {
-        // The base halo first; where a value needs more (points of wide
-        // spacing nearby), again with what it needs.
-        file.followed = state.wanted;
-        bs.brick_runs += with_brick_points(bins, plan, brick, plan.halo, bins.far(brick),
-                                           [&](const OrientedPoints& sub) {
-          file.surface = reconstruct_brick(sub, plan.grid, region_of(plan, brick), file.followed,
-                                           cubes_per_point * double(sub.size()), bins.far(brick), options);
-          return double(file.surface.needed_halo);
-        }, &bs.widest_halo);
-        write_brick(path, plan.key, file);
-      }
-      state.vertices = file.surface.vertex_edges.size();
-      state.leaves = file.surface.leaf_cubes.size();
-      state.triangles = file.surface.triangles.size();
-      state.colored = !file.surface.colors.empty();
-      state.followed = std::move(file.followed);
-      state.requests = std::move(file.surface.requests);
-      state.border = std::move(file.surface.border_cubes);
-      if (!state.done) progress.advance(), state.done = true;
-    }
-    if (!ran) break;
-    ++bs.follow_passes;
-    // Requests a brick has not met yet make it run again.
-    std::vector<std::pair<std::uint32_t, std::uint64_t>> asked;
-    for (const auto& [brick, state] : bricks)
-      for (std::uint64_t cube : state.requests) asked.push_back({brick_of_cube(plan, cube), cube});
-    for (const auto& [target, cube] : asked) {
-      State& t = bricks[target];
-      if (t.done && (std::binary_search(t.border.begin(), t.border.end(), cube) ||
-                     std::binary_search(t.followed.begin(), t.followed.end(), cube)))
-        continue;
-      if (std::binary_search(t.wanted.begin(), t.wanted.end(), cube)) continue;
-      t.wanted.insert(std::upper_bound(t.wanted.begin(), t.wanted.end(), cube), cube);
-      t.pending = true;
-    }
-  }
-  progress.finish();
+  const std::map<std::uint32_t, BrickState> bricks = follow_bricks(bins, plan, options, dir, sharing, &bs);
   stats.seconds_distances = lap();
 
   // Phase 4: the bricks welded by lattice edge, and cleaned up as in core.
@@ -799,6 +960,35 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
 Reconstruction reconstruct_in_bricks(const PointSpool& points, const ReconstructOptions& options,
                                      const BrickOptions& bricks, BrickStats* stats, const BrickPlan* plan) {
   return bricks_from(source_of(points), options, bricks, stats, plan);
+}
+
+void serve_bricks(const ReconstructOptions& options, const BrickOptions& brick_options) {
+  WorkSharing& sharing = *brick_options.sharing;
+  BrickPlan plan;
+  Bins bins;
+  bins.owner = false;
+  if (!receive_plan(sharing, &plan, &bins)) return;
+  const std::string rank = "rank " + std::to_string(sharing.rank());
+  if (plan.key != plan_key(bins.census, options, plan.brick_cubes))
+    throw InputError("", rank + " has other reconstruction options or another scan2lod than rank 0: "
+                                "start every rank with the same command and program");
+  bins.path = (fs::path(brick_options.work_dir) / "points.bins").string();
+  const std::string shared = " (every rank must see the work folder at the same path: on several machines, "
+                             "a shared file system)";
+  bins.fd = ::open(bins.path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (bins.fd < 0)
+    throw InputError(bins.path, rank + " cannot read the points rank 0 binned: " + std::strerror(errno) + shared);
+  struct stat file {};
+  if (::fstat(bins.fd, &file) != 0 || std::uint64_t(file.st_size) != bins.census.count * sizeof(PointRecord))
+    throw InputError(bins.path, rank + " sees another file than the points rank 0 binned" + shared);
+  BrickStats stats;
+  follow_bricks(bins, plan, options, (fs::path(brick_options.work_dir) / "bricks").string(), sharing, &stats);
+}
+
+void release_brick_workers(WorkSharing* sharing) {
+  if (!sharing || sharing->ranks() == 1 || sharing->rank() != 0) return;
+  std::string none;
+  sharing->broadcast(&none);
 }
 
 }  // namespace scan2lod

@@ -9,6 +9,13 @@
 //
 // Finished bricks are kept in a work folder, written atomically, so a build
 // that is killed resumes from them and ends with the same surface.
+//
+// The bricks of one pass are independent work: under MPI (BrickOptions::
+// sharing) they are handed out to the ranks of the job as each asks for the
+// next, and the ranks tell each other after every pass what their bricks
+// asked of their neighbours. Rank 0 reads and bins the points and welds; the
+// other ranks take part through serve_bricks(). Every brick is the one a
+// single process computes, so the surface is the same whatever the ranks.
 #pragma once
 
 #include "reconstruct/marching_cubes.h"
@@ -19,6 +26,8 @@
 
 namespace scan2lod {
 
+class WorkSharing;
+
 struct BrickOptions {
   std::string work_dir;      // finished bricks are kept here; created if missing
   double memory_bytes = 0;   // one brick's work must fit; 0: the machine's
@@ -26,6 +35,10 @@ struct BrickOptions {
   // Called once the points are binned on disk: from there on the build reads
   // them from the bins only, so a caller may free its own copy.
   std::function<void()> points_binned;
+  // The ranks that share the bricks (this one is rank 0 of them: the one that
+  // holds the points and welds), all seeing work_dir at the same path; null:
+  // this process alone.
+  WorkSharing* sharing = nullptr;
 };
 
 struct BrickPlan {
@@ -72,5 +85,17 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
 Reconstruction reconstruct_in_bricks(const PointSpool& points, const ReconstructOptions& options,
                                      const BrickOptions& bricks, BrickStats* stats = nullptr,
                                      const BrickPlan* plan = nullptr);
+
+// On a rank other than 0 of bricks.sharing: waits for rank 0's plan, runs
+// the bricks it is handed out (reading the points rank 0 binned in
+// bricks.work_dir), and returns when every pass is over; or at once, when
+// rank 0 builds without bricks (release_brick_workers). `options` must be
+// rank 0's (a plan made with other options is refused).
+void serve_bricks(const ReconstructOptions& options, const BrickOptions& bricks);
+
+// On rank 0: tells the ranks waiting in serve_bricks() that no bricks come.
+// Call it instead of reconstruct_in_bricks() when a build shares its work;
+// nothing when `sharing` is null or alone.
+void release_brick_workers(WorkSharing* sharing);
 
 }  // namespace scan2lod

@@ -20,6 +20,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
   libmeshoptimizer-dev libmetis-dev libtinygltf-dev libxxhash-dev
   xvfb xauth libgl1-mesa-dri
+  libopenmpi-dev openmpi-bin
 )
 
 install_deps() {
