@@ -136,6 +136,7 @@ void build(Args* args, WorkSharing* job) {
                      {"follow_passes", report.bricks.follow_passes}, {"halo", report.plan.halo},
                      {"widest_halo", report.bricks.widest_halo}};
     if (report.cluster_block > 0) j["cluster_block"] = report.cluster_block;
+    if (report.cluster_lanes > 0) j["cluster_lanes"] = report.cluster_lanes;
     const double mib = 1 << 20;
     j["memory_mib"] = {{"budget", report.budget_bytes / mib},
                        {"estimated", {{"in_core_reconstruction", report.estimated_bytes / mib},

@@ -797,7 +797,8 @@ void commit_block(Shared& s, Block& b, ClusterHierarchy* out, Block* carried, Tr
 template <class Make>
 void blocks_side_by_side(Shared& s, Lane& main, std::size_t blocks, std::size_t pass_triangles, Make make,
                          ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
-  const std::size_t lane_count = std::min<std::size_t>(std::size_t(std::max(main.threads, 1)), blocks);
+  const int asked = s.options->lanes > 0 ? std::min(s.options->lanes, main.threads) : main.threads;
+  const std::size_t lane_count = std::min<std::size_t>(std::size_t(std::max(asked, 1)), blocks);
   if (lane_count <= 1) {
     for (std::size_t b = 0; b < blocks; ++b) {
       Block one = make(main, b);

@@ -134,6 +134,10 @@ struct ClusterOptions {
   // 0: the whole mesh at once. kAutomaticBlocks: the whole mesh up to
   // kWholeMeshTriangles, blocks of kBlockTriangles above.
   std::int64_t block_triangles = kAutomaticBlocks;
+  // In blocks: how many blocks of a pass run side by side, each on a thread
+  // of its own, holding a block's working memory each (0: one a thread).
+  // The model is the same at any number.
+  int lanes = 0;
   // With block_triangles: finished clusters' triangles go here as each block
   // ends, not to memory (ClusterHierarchy::spool).
   std::shared_ptr<TriangleSpool> spool;

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <thread>
 #include <functional>
 
 namespace scan2lod {
@@ -290,6 +291,18 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
     // Finished clusters go to a spool on disk only where memory cannot hold
     // them too: writing them cost 4 % of an in-core build's cluster stage.
     const bool blocked = report.cluster_block > 0 && report.full_triangles > std::size_t(report.cluster_block);
+    // Blocks side by side, a thread each, where the budget holds a block's
+    // working memory per thread (the pair at R = 1024: 387 MiB with one
+    // block at a time, 415 MiB with two); else one after another, which
+    // makes the same model.
+    if (blocked) {
+      const int threads = options.reconstruct.threads > 0 ? options.reconstruct.threads
+                                                          : int(std::max(1u, std::thread::hardware_concurrency()));
+      const double per_lane = double(report.cluster_block) * kBlockBytesPerTriangle;
+      clusters.lanes = std::max(1, std::min(threads, int((budget - report.estimated_cluster_bytes) / per_lane) + 1));
+      report.estimated_cluster_bytes += double(clusters.lanes - 1) * per_lane;
+      report.cluster_lanes = clusters.lanes;
+    }
     const double held = kHeldClusterBytesPerTriangle * double(report.full_triangles);
     if (blocked && (options.work_dir.empty() || report.estimated_cluster_bytes + held <= budget))
       report.estimated_cluster_bytes += held;
