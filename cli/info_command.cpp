@@ -34,6 +34,13 @@ void add_info_command(CLI::App& app) {
     if (!args->json)
       say("%s: %.1f MB, loaded in %.3f s, %zu vertices\n", args->model.c_str(), ec ? 0.0 : double(bytes) / 1e6,
                   load_seconds, model.vertices.size());
+    // A georeferenced model's frame: positions are relative to it, and every
+    // writer adds it back.
+    if (model.origin != Vec3d::Zero()) {
+      if (args->json) j["origin"] = {model.origin.x(), model.origin.y(), model.origin.z()};
+      else say("origin (%.17g, %.17g, %.17g): positions are relative to it; levels are written in its frame\n",
+               model.origin.x(), model.origin.y(), model.origin.z());
+    }
 
     if (model.has(LodStructure::kOctree)) {
       const OctreeSummary o = describe_octree(model);

@@ -279,6 +279,13 @@ TEST(LasOutput, AModelWithTheSurveysOriginExtractsAndExportsInTheFilesFrame) {
   const fs::path path = scratch("hill_api.mco");
   save_model(path.string(), model);
   EXPECT_EQ(load_model(path.string()).origin, report.origin);
+  // `info` shows the frame, to the bit in --json.
+  const CliRun info = run_cli("info " + path.string() + " --json");
+  ASSERT_EQ(info.status, 0) << output_error(info);
+  const nlohmann::json j = nlohmann::json::parse(info.output);
+  ASSERT_TRUE(j.contains("origin")) << info.output;
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(j["origin"][std::size_t(k)].get<double>(), report.origin[k]);
+  EXPECT_NE(run_cli("info " + path.string()).output.find("origin ("), std::string::npos);
   expect_model_outputs_in_the_files_frame(s, path, "api");
 }
 
