@@ -146,7 +146,7 @@ void add_export_command(CLI::App& app) {
                   "one file per level (bunny.ply -> bunny_LOD0.ply, ...)")
       ->required();
   cmd->add_option("--structure", args->structure, "clusters or octree (default: clusters when the model has them)")
-      ->check(CLI::IsMember({"clusters", "octree"}, CLI::ignore_case));
+      ->transform(CLI::IsMember({"clusters", "octree"}, CLI::ignore_case));
   CLI::Option* levels = cmd->add_option("--levels", args->percents,
                                         "Levels as percentages, e.g. 100,25,5,1 (the default); a repeated one is "
                                         "written once")
@@ -160,7 +160,7 @@ void add_export_command(CLI::App& app) {
   cmd->add_option("--format", args->format,
                   "glb, gltf, ply, obj, off, stl or vtp (default: -o's extension), or 3dtiles (-o names a folder: "
                   "a 3D Tiles 1.1 tileset of the cluster hierarchy)")
-      ->check(CLI::IsMember({"glb", "gltf", "ply", "obj", "off", "stl", "vtp", "3dtiles"}, CLI::ignore_case));
+      ->transform(CLI::IsMember({"glb", "gltf", "ply", "obj", "off", "stl", "vtp", "3dtiles"}, CLI::ignore_case));
   cmd->add_flag("--no-quantize", args->no_quantize, "glTF and 3dtiles: 32-bit float positions and normals");
   const std::vector<CLI::Option*> tileset_flags = {
       cmd->add_option("--tile-triangles", args->tile_triangles,
@@ -176,10 +176,9 @@ void add_export_command(CLI::App& app) {
           ->default_val(1080)};
   cmd->add_flag("--json", args->json, "Print the levels, files, timings and any warnings (\"warnings\") as JSON");
   cmd->callback([args, coverage_flags, tileset_flags, levels, budgets] {
-    std::string lower_format = args->format;
-    std::transform(lower_format.begin(), lower_format.end(), lower_format.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    if (lower_format == "3dtiles") {
+    // --format and --structure come in lower case (CLI11 maps them onto
+    // their members).
+    if (args->format == "3dtiles") {
       for (const CLI::Option* flag : {levels, budgets})
         if (flag->count())
           throw CLI::ValidationError(flag->get_name(), "does not apply to --format 3dtiles: a tileset holds every "
@@ -188,10 +187,7 @@ void add_export_command(CLI::App& app) {
         if (flag->count())
           throw CLI::ValidationError(flag->get_name(), "does not apply to --format 3dtiles: the viewer refines "
                                                        "by each tile's geometricError");
-      std::string structure = args->structure;
-      std::transform(structure.begin(), structure.end(), structure.begin(),
-                     [](unsigned char c) { return char(std::tolower(c)); });
-      export_tileset({args->model, args->output, structure, args->tile_triangles, args->no_quantize,
+      export_tileset({args->model, args->output, args->structure, args->tile_triangles, args->no_quantize,
                       args->no_meshopt, args->json});
       return;
     }
@@ -207,8 +203,7 @@ void add_export_command(CLI::App& app) {
     if (!(args->pixel_error > 0) || args->height < 1)
       throw InputError("", "--pixel-error must be > 0 and --height >= 1");
     std::string format = args->format;
-    if (format.empty()) format = extension_of(args->output);
-    std::transform(format.begin(), format.end(), format.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (format.empty()) format = extension_of(args->output);  // lower case too
     if (format.empty())
       throw InputError(args->output, std::string("has no extension to choose a format by: name the output ") +
                                          kExportFormats + ", or give --format");
