@@ -356,11 +356,6 @@ struct Shared {
   Shared() = default;
   Shared(const Shared&) = delete;  // the views point into it
 
-  // The mesh's own vertices alone: what blocks that run side by side read,
-  // while others' placed vertices join the shared arrays.
-  ArrayView<Vec3f> mesh_positions, mesh_normals;
-  ArrayView<Rgb> mesh_colors;
-
   // A group's placed vertices into the shared arrays, and `triangles` (-1 - i
   // for placed vertex i) onto their indices; each is its own weld, unlocked.
   void take_placed(std::vector<Vec3f>* placed_positions, std::vector<Vec3f>* placed_normals,
@@ -388,14 +383,13 @@ struct Shared {
 // What a block's rounds work with besides the shared tables: their threads,
 // the marks they set a vertex at a time (-1 for every vertex between uses),
 // and what they read. Blocks that run side by side (a lane each) read the
-// mesh's own vertices only, and hold the vertices their collapses place
-// until the block is committed, in block order: the same numbers as one
-// block after the other.
+// vertices there were when their pass began, and hold the vertices their
+// collapses place until the block is committed, in block order: the same
+// numbers as one block after the other.
 struct Lane {
   int threads = 1;
   std::vector<std::int32_t>* marks = nullptr;
-  SimplifyInput input;
-  JoinedView<Vec3f> positions;
+  SimplifyInput input;  // its positions are what the lane reads
   bool holds_placed = false;
 };
 
@@ -488,7 +482,7 @@ void finish_top(Shared& s, Lane& lane, Block* b) {
   SplitGroup top;
   top.simplified = cluster_group(tris, kCoarsestTriangles, lane.input, ClusterSoundness::kPiecesOnly);
   if (top.simplified.triangles.size() >= tris.size()) return;
-  split_group(lane.positions, s.options->cluster_triangles, &top);
+  split_group(lane.input.positions, s.options->cluster_triangles, &top);
   std::vector<std::int32_t> next;
   add_group(s, b->active, top, b, &next);
   b->active = std::move(next);
@@ -548,7 +542,7 @@ void run_rounds(Shared& s, Lane& lane, Block* b, int rounds = 255, bool top = fa
       simplified = simplify_group(tris, target, lane.input);
       // Folded: collapses that only handles left room for dragged the
       // surface across the group. Lighter targets, else a stall.
-      const float radius = points_sphere(lane.positions, tris.data(), tris.size()).radius;
+      const float radius = points_sphere(lane.input.positions, tris.data(), tris.size()).radius;
       for (double lighter : {0.5 * (1 + reduction), options.stall, 1.0}) {
         if (!folded(simplified, radius)) break;
         if (lighter == 1.0) {
@@ -571,7 +565,7 @@ void run_rounds(Shared& s, Lane& lane, Block* b, int rounds = 255, bool top = fa
       if (simplifies[g] && !lane.holds_placed) s.take_added(&result[g].simplified);
     }
     on_threads(members.size(), lane.threads, [&](std::size_t g) {
-      if (simplifies[g]) split_group(lane.positions, options.cluster_triangles, &result[g]);
+      if (simplifies[g]) split_group(lane.input.positions, options.cluster_triangles, &result[g]);
     });
     for (std::int32_t v : touched) {
       (*lane.marks)[std::size_t(v)] = -1;
@@ -756,13 +750,13 @@ Block first_round(Shared& s, Lane& lane, const Triangle* begin, const Triangle* 
   const std::size_t parts = std::max<std::size_t>(1, (size + kSmallestRun - 1) / kSmallestRun);
   std::vector<std::size_t> runs(parts + 1);
   for (std::size_t p = 0; p <= parts; ++p) runs[p] = p * size / parts;
-  SplitGroup full = split_runs(lane.positions, runs, s.options->cluster_triangles, lane.threads,
+  SplitGroup full = split_runs(lane.input.positions, runs, s.options->cluster_triangles, lane.threads,
                                [begin](std::size_t i) -> const Triangle& { return begin[i]; });
   Block one;
   append_clusters(full, -1, 0, &one.h, &one.active);
   full = SplitGroup();
   for (const Cluster& c : one.h.clusters)
-    one.sphere.push_back(points_sphere(lane.positions, &one.h.triangles[c.first_triangle], c.triangle_count));
+    one.sphere.push_back(points_sphere(lane.input.positions, &one.h.triangles[c.first_triangle], c.triangle_count));
   one.own_error.assign(one.h.clusters.size(), 0.f);
   one.seeds = one.h.clusters.size();
   one.round = round;
@@ -813,8 +807,8 @@ void blocks_side_by_side(Shared& s, Lane& main, std::size_t blocks, std::size_t 
   s.locked.reserve(s.locked.size() + room);
   s.vertex_group.reserve(s.vertex_group.size() + room);
   s.added_positions.reserve(s.added_positions.size() + room);
-  if (!s.mesh_normals.empty()) s.added_normals.reserve(s.added_normals.size() + room);
-  if (!s.mesh_colors.empty()) s.added_colors.reserve(s.added_colors.size() + room);
+  if (!s.input.normals.empty()) s.added_normals.reserve(s.added_normals.size() + room);
+  if (!s.input.colors.empty()) s.added_colors.reserve(s.added_colors.size() + room);
   std::vector<std::vector<std::int32_t>> own_marks(lane_count - 1);
   std::vector<Lane> lanes(lane_count);
   for (std::size_t l = 0; l < lane_count; ++l) {
@@ -825,7 +819,6 @@ void blocks_side_by_side(Shared& s, Lane& main, std::size_t blocks, std::size_t 
     lane.input.positions = s.input.positions.frozen();
     lane.input.normals = s.input.normals.frozen();
     lane.input.colors = s.input.colors.frozen();
-    lane.positions = lane.input.positions;
     if (l == 0) {
       lane.marks = main.marks;
     } else {
@@ -1042,14 +1035,10 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
   s.locked.assign(positions.size(), 0);
   s.input.locked = &s.locked;
   s.vertex_group.assign(positions.size(), -1);
-  s.mesh_positions = positions;
-  s.mesh_normals = normals;
-  s.mesh_colors = colors;
   Lane main;
   main.threads = s.threads;
   main.marks = &s.vertex_group;
   main.input = s.input;
-  main.positions = s.positions;
   s.error_floor = 1e-7f * std::max(diagonal, 1e-30f);
   s.expected = 2.0 * double(triangles.size());
 
