@@ -268,13 +268,30 @@ OrientedPoints merge_parts(std::vector<OrientedPoints>* parts) {
 
 void stream_oriented_points(const std::vector<std::string>& inputs, const AcquisitionOptions& options,
                             AcquisitionReport* report,
-                            const std::function<void(OrientedPoints&&, double read_share)>& take) {
-  const std::vector<Job> jobs = plan_jobs(inputs, options);
+                            const std::function<void(OrientedPoints&&, double read_share)>& take,
+                            InputShare share) {
+  std::vector<Job> jobs = plan_jobs(inputs, options);
+  const Vec3d origin = jobs.front().origin;
   std::vector<double> bytes(jobs.size() + 1, 0.0);  // of the files before each job
   for (std::size_t i = 0; i < jobs.size(); ++i) {
     std::error_code ec;
     const std::uintmax_t size = std::filesystem::file_size(jobs[i].file, ec);
     bytes[i + 1] = bytes[i] + (ec ? 0.0 : double(size));
+  }
+  if (share.parts > 1) {
+    // A file goes to the part its middle byte falls in: contiguous runs,
+    // each near its part of the bytes, whatever the sizes.
+    std::size_t from = jobs.size(), to = 0;
+    for (std::size_t i = 0; i < jobs.size(); ++i) {
+      const double middle = bytes.back() > 0 ? 0.5 * (bytes[i] + bytes[i + 1]) / bytes.back()
+                                             : (double(i) + 0.5) / double(jobs.size());
+      if (std::min(share.parts - 1, int(middle * share.parts)) == share.part) from = std::min(from, i), to = i + 1;
+    }
+    if (from >= to) from = to = 0;
+    jobs = std::vector<Job>(jobs.begin() + std::ptrdiff_t(from), jobs.begin() + std::ptrdiff_t(to));
+    bytes = std::vector<double>(bytes.begin() + std::ptrdiff_t(from), bytes.begin() + std::ptrdiff_t(to) + 1);
+    const double before = bytes.front();
+    for (double& b : bytes) b -= before;
   }
   std::size_t taken = 0;
   auto take_next = [&](OrientedPoints&& part) {
@@ -284,7 +301,7 @@ void stream_oriented_points(const std::vector<std::string>& inputs, const Acquis
   AcquisitionReport local;
   AcquisitionReport& r = report ? *report : local;
   r = AcquisitionReport();
-  r.origin = jobs.front().origin;
+  r.origin = origin;
   // As many files at once as there are cores: in memory are those only.
   const std::size_t window = std::size_t(std::max(1, options.threads > 0 ? options.threads : omp_get_max_threads()));
   Progress progress("reading inputs", jobs.size());

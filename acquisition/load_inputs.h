@@ -49,15 +49,25 @@ OrientedPoints load_oriented_points(const std::vector<std::string>& inputs,
                                     const AcquisitionOptions& options = {},
                                     AcquisitionReport* report = nullptr);
 
+// One of `parts` contiguous runs of the input files (after a .conf is
+// expanded into its scans), balanced by file size: the files one process of
+// a job reads. Part 0 of 1 is every file.
+struct InputShare {
+  int part = 0;
+  int parts = 1;
+};
+
 // The same, file by file: each file's oriented points go to `take` in input
 // order, and no more files are in memory at once than there are cores. For
 // inputs larger than memory (spooled to disk as they come). The report and
-// the errors are those of load_oriented_points().
-// `take` also gets the share of the input files' bytes read so far (its part's
+// the errors are those of load_oriented_points(), for the files of `share`
+// (the common origin is every file's).
+// `take` also gets the share of the files' bytes read so far (its part's
 // file included), so that a caller can project what the rest will hold.
 void stream_oriented_points(const std::vector<std::string>& inputs, const AcquisitionOptions& options,
                             AcquisitionReport* report,
-                            const std::function<void(OrientedPoints&&, double read_share)>& take);
+                            const std::function<void(OrientedPoints&&, double read_share)>& take,
+                            InputShare share = {});
 
 // The parts as one set, in order (OrientedPoints::append); empties `parts`.
 OrientedPoints merge_parts(std::vector<OrientedPoints>* parts);

@@ -43,9 +43,9 @@ BuildOptions options_of(Args& args, WorkSharing* job) {
   return options;
 }
 
-// Under mpirun every rank runs this command: rank 0 reads the inputs, builds
-// and writes the model, the others take their share of the bricks and write
-// nothing else. An error on any rank ends them all.
+// Under mpirun every rank runs this command: each reads its share of the
+// inputs, rank 0 builds and writes the model, the others take their share of
+// the bricks and write nothing else. An error on any rank ends them all.
 void build_in_job(Args* args) {
   const std::unique_ptr<WorkSharing> job = join_job();
   const std::string rank =
@@ -99,7 +99,7 @@ void add_build_command(CLI::App& app) {
 namespace {
 
 void build(Args* args, WorkSharing* job) {
-  if (job->rank() != 0) return serve_build(options_of(*args, job));
+  if (job->rank() != 0) return serve_build(args->inputs, options_of(*args, job));
   using clock = std::chrono::steady_clock;
   auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
   const auto start = clock::now();

@@ -1,8 +1,8 @@
 // Work shared by the processes of one job. A build started as
 // `mpirun -np N scan2lod build ...` runs N processes (ranks); the bricks of
 // its reconstruction are independent work, handed out to whichever rank asks
-// next, and rank 0 does everything else (reading the inputs, binning the
-// points, welding, the LOD structures, writing the model). The ranks meet
+// next; each rank reads a share of the inputs, and rank 0 does everything
+// else (welding, the LOD structures, writing the model). The ranks meet
 // only through this face and through the work folder, which they must all
 // see at the same path: a shared file system when they run on more than one
 // machine.

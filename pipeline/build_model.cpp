@@ -3,6 +3,8 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/vertex_order.h"
+#include "distributed/message.h"
+#include "distributed/work_sharing.h"
 #include "io/mesh_file.h"
 #include "lod/lod_array.h"
 #include "lod/mc_octree.h"
@@ -173,8 +175,118 @@ InputPoints::~InputPoints() {
   if (!made_folder.empty()) std::filesystem::remove(made_folder, ec);
 }
 
+namespace {
+
+// The work folder, made if missing; returns it when this call made it.
+std::string make_work_folder(const std::string& work_dir) {
+  std::error_code ec;
+  const bool existed = std::filesystem::exists(work_dir, ec);
+  std::filesystem::create_directories(work_dir, ec);
+  if (ec && !std::filesystem::is_directory(work_dir, ec))
+    throw InputError(work_dir, "cannot make the work folder: " + ec.message());
+  return existed ? "" : work_dir;
+}
+
+// The spool and the bins each take a record a point: refused when the disk
+// cannot hold them for `points` points.
+void check_spool_room(const std::string& work_dir, double points) {
+  std::error_code ec;
+  const double need = 2.0 * double(sizeof(PointRecord)) * points;
+  const std::filesystem::space_info space = std::filesystem::space(work_dir, ec);
+  if (!ec && double(space.available) < need)
+    throw InputError(work_dir, "the input points (about " + std::to_string(std::llround(points / 1e6)) +
+                                   " M) need about " + binary_size(need) + " of disk in the work folder and " +
+                                   binary_size(double(space.available)) + " are free there");
+}
+
+void put_text(MessageWriter* out, const std::string& text) { out->put(std::vector<char>(text.begin(), text.end())); }
+std::string get_text(MessageReader* in) {
+  std::vector<char> text;
+  in->get(&text);
+  return std::string(text.begin(), text.end());
+}
+
+std::string spool_path(const std::string& work_dir, int rank) {
+  return (std::filesystem::path(work_dir) / ("points." + std::to_string(rank) + ".spool")).string();
+}
+
+// Under a job of several ranks: each reads its share of the input files into
+// a spool of its own, and all learn every share's census and report. Points
+// that rank 0 can hold (as load_within_budget() decides for one process) are
+// then read back by it from every spool, in rank order; else each rank's
+// spool joins the job (PointSpool::join) and every rank bins its own share.
+InputPoints load_shares(const std::vector<std::string>& inputs, const BuildOptions& options, AcquisitionReport* report) {
+  WorkSharing& job = *options.sharing;
+  if (options.work_dir.empty())
+    throw InputError("", "a build on several ranks needs a work folder: each rank spools the inputs it reads there");
+  InputPoints loaded;
+  const std::string made = make_work_folder(options.work_dir);
+  if (job.rank() == 0) loaded.made_folder = made;
+  loaded.spool = std::make_unique<PointSpool>(spool_path(options.work_dir, job.rank()));
+  AcquisitionReport mine;
+  bool checked = false;
+  stream_oriented_points(inputs, options.acquisition, &mine, [&](OrientedPoints&& part, double read_share) {
+    if (!checked) check_spool_room(options.work_dir, double(part.size()) / std::max(read_share, 1e-9)), checked = true;
+    loaded.spool->add(part);
+    part = OrientedPoints();
+  }, InputShare{job.rank(), job.ranks()});
+  loaded.spool->close();
+
+  // Rank 0's budget decides for all: what is available differs between machines.
+  MessageWriter out;
+  put_text(&out, census_bytes(loaded.spool->census()));
+  out.put(options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes());
+  out.put(std::uint64_t(mine.range_images)), out.put(std::uint64_t(mine.meshes));
+  out.put(std::uint64_t(mine.clouds)), out.put(std::uint64_t(mine.clouds_estimated));
+  for (const std::vector<std::string>* list : {&mine.files, &mine.warnings}) {
+    out.put(std::uint64_t(list->size()));
+    for (const std::string& text : *list) put_text(&out, text);
+  }
+  std::vector<PointCensus> shares;
+  double budget = 0;
+  AcquisitionReport all;
+  all.origin = mine.origin;  // every rank's: the first LAS input's, whoever reads it
+  for (const std::string& bytes : job.gather_all(out.bytes())) {
+    MessageReader in(bytes);
+    shares.push_back(census_from_bytes(get_text(&in)));
+    double rank_budget = 0;
+    in.get(&rank_budget);
+    if (shares.size() == 1) budget = rank_budget;
+    std::uint64_t counts[4] = {};
+    for (std::uint64_t& c : counts) in.get(&c);
+    all.range_images += counts[0], all.meshes += counts[1], all.clouds += counts[2], all.clouds_estimated += counts[3];
+    for (std::vector<std::string>* list : {&all.files, &all.warnings}) {
+      std::uint64_t n = 0;
+      in.get(&n);
+      for (std::uint64_t k = 0; k < n; ++k) list->push_back(get_text(&in));
+    }
+  }
+  if (report) *report = all;
+  const PointCensus census = merge_censuses(shares);
+  if (options.strategy != BuildStrategy::kBricks && kInputBytesPerPoint * double(census.count) <= 0.25 * budget) {
+    // The others keep their spools until rank 0 has read them: they wait
+    // for its brick plan (serve_bricks()), which comes after.
+    if (job.rank() != 0) return loaded;
+    OrientedPoints& points = loaded.points;
+    points.positions.reserve(census.count);
+    points.normals.reserve(census.count);
+    for (int r = 0; r < job.ranks(); ++r)
+      for_each_spooled(spool_path(options.work_dir, r), shares[std::size_t(r)].count,
+                       [&](const PointRecord* records, std::size_t n) { append_records(records, n, census, &points); });
+    loaded.spool.reset();
+    return loaded;
+  }
+  std::size_t first = 0;
+  for (int r = 0; r < job.rank(); ++r) first += shares[std::size_t(r)].count;
+  loaded.spool->join(census, first);
+  return loaded;
+}
+
+}  // namespace
+
 InputPoints load_within_budget(const std::vector<std::string>& inputs, const BuildOptions& options,
                                AcquisitionReport* report) {
+  if (options.sharing && options.sharing->ranks() > 1) return load_shares(inputs, options, report);
   const double budget = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
   InputPoints loaded;
   std::vector<OrientedPoints> parts;
@@ -189,19 +301,10 @@ InputPoints load_within_budget(const std::vector<std::string>& inputs, const Bui
     if (!loaded.spool) {
       if (options.work_dir.empty())
         throw InputError("", "a build in bricks needs a work folder: the points go there as they are read");
-      std::error_code ec;
-      if (!std::filesystem::exists(options.work_dir, ec)) loaded.made_folder = options.work_dir;
-      std::filesystem::create_directories(options.work_dir, ec);
-      if (ec) throw InputError(options.work_dir, "cannot make the work folder: " + ec.message());
-      // The spool and the bins each take a record a point: projected from
-      // the points so far over the share of the input bytes they came from.
-      const double points = (held / kInputBytesPerPoint + double(part.size())) / std::max(read_share, 1e-9);
-      const double need = 2.0 * double(sizeof(PointRecord)) * points;
-      const std::filesystem::space_info space = std::filesystem::space(options.work_dir, ec);
-      if (!ec && double(space.available) < need)
-        throw InputError(options.work_dir, "the input points (about " + std::to_string(std::llround(points / 1e6)) +
-                                               " M) need about " + binary_size(need) + " of disk in the work folder and " +
-                                               binary_size(double(space.available)) + " are free there");
+      loaded.made_folder = make_work_folder(options.work_dir);
+      // Projected from the points so far over the share of the input bytes they came from.
+      check_spool_room(options.work_dir,
+                       (held / kInputBytesPerPoint + double(part.size())) / std::max(read_share, 1e-9));
       loaded.spool = std::make_unique<PointSpool>((std::filesystem::path(options.work_dir) / "points.spool").string());
       for (OrientedPoints& held_part : parts) loaded.spool->add(held_part), held_part = OrientedPoints();
       parts.clear();
@@ -232,7 +335,7 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
   if (!options.octree && !options.clusters) throw InputError("", "no LOD structure asked for");
   BuildReport local;
   BuildReport& report = report_out ? *report_out : local;
-  report.points = spool ? spool->census().count : points->size();
+  report.points = spool ? spool->job_census().count : points->size();
   report.mesh_input = mesh != nullptr;
   const bool reconstructs = options.octree || !mesh;
   // One progress for the whole build (reconstruction-relative shares).
@@ -333,13 +436,22 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
 
 }  // namespace
 
-void serve_build(const BuildOptions& options) {
+void serve_build(const std::vector<std::string>& inputs, const BuildOptions& options) {
   BrickOptions bricks;
   bricks.work_dir = options.work_dir;
   bricks.memory_bytes = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
   bricks.brick_cubes = options.brick_cubes;
   bricks.sharing = options.sharing;
-  serve_bricks(options.reconstruct, bricks);
+  AcquisitionReport report;
+  InputPoints points = load_within_budget(inputs, options, &report);
+  // As build_model() decides on rank 0: one mesh given for its clusters alone is not reconstructed.
+  const bool mesh_only = report.meshes == 1 && report.files.size() == 1 && options.clusters && !options.octree;
+  if (points.spool && points.spool->shared() && !mesh_only) {
+    bricks.points_binned = [&points] { points.release(); };
+    serve_bricks(*points.spool, options.reconstruct, bricks);
+  } else {
+    serve_bricks(options.reconstruct, bricks);
+  }
 }
 
 LodModel build_model(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,

@@ -65,10 +65,12 @@ struct BuildReport {
 };
 
 // On a rank other than 0 of options.sharing: its share of the build that
-// rank 0 runs with the same options (the bricks it is handed out, if the
-// build goes by bricks); returns when its part is over. It reads no input and
-// writes nothing but bricks in options.work_dir.
-void serve_build(const BuildOptions& options);
+// rank 0 runs with the same inputs and options: it reads its share of the
+// input files (load_within_budget()), bins them when the points go by
+// bricks from every rank, and runs the bricks it is handed out; returns when
+// its part is over. It writes nothing but its spool, its bins and bricks in
+// options.work_dir.
+void serve_build(const std::vector<std::string>& inputs, const BuildOptions& options);
 
 // @param[in] inputs  what load_oriented_points() takes
 // Throws InputError for unreadable input, for no surface, for a budget that
@@ -80,12 +82,16 @@ LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions&
 // The inputs' oriented points: in memory while they take less than a quarter
 // of the budget (past that the in-core reconstruction cannot fit), else
 // spooled to options.work_dir as the files are read, a few at a time; always
-// spooled when the strategy is bricks.
+// spooled when the strategy is bricks. Collective under options.sharing of
+// several ranks: each reads a share of the files into a spool of its own;
+// points that fit as above are then rank 0's in memory, else each rank's
+// spool is its share of the job's (PointSpool::join). The report is of
+// every rank's files, on every rank.
 struct InputPoints {
   OrientedPoints points;              // in memory
   std::unique_ptr<PointSpool> spool;  // or on disk (closed)
   std::string made_folder;            // the work folder the spool made, removed with it when left empty
-  std::size_t size() const { return spool ? spool->census().count : points.size(); }
+  std::size_t size() const { return spool ? spool->job_census().count : points.size(); }
   void release() { points = OrientedPoints(), spool.reset(); }
   InputPoints() = default;
   InputPoints(InputPoints&&) = default;

@@ -82,6 +82,11 @@ std::uint64_t plan_key(const PointCensus& points, const ReconstructOptions& o, i
 struct PointSource {
   PointCensus census;
   std::function<void(const RecordVisitor&)> for_each;
+  // Under a job whose ranks each spooled a share of the points: the job's
+  // ranks (each visits its own share), and the job's index of this share's
+  // first point. Null: this process visits every point.
+  WorkSharing* shares = nullptr;
+  std::size_t first = 0;
 };
 
 // How far a point's influence reaches, in world units. A corner is defined
@@ -126,7 +131,7 @@ int brick_of(const CubeGrid& grid, int brick_cubes, int per_axis, const Vec3f& p
 // into every larger size, all being powers of two), and a sample of the
 // spacings for their median.
 struct PointSurvey {
-  ReconstructionEstimate whole;
+  ReconstructionEstimate whole;  // of every share
   int smallest = 0;                                  // brick side of the counts
   std::vector<std::pair<std::array<int, 3>, std::size_t>> counts;  // brick (at `smallest`), its points
   double median_spacing = 0;
@@ -146,6 +151,12 @@ struct PointSurvey {
   }
 };
 
+// What a rank whose plan is not rank 0's is told.
+std::string not_rank_zeros_plan(int rank) {
+  return "rank " + std::to_string(rank) + " has other reconstruction options or another scan2lod than rank 0: "
+         "start every rank with the same command and program";
+}
+
 PointSurvey survey(const PointSource& points, const CubeGrid& grid, int smallest, int threads) {
   PointSurvey s;
   s.smallest = smallest;
@@ -155,8 +166,10 @@ PointSurvey survey(const PointSource& points, const CubeGrid& grid, int smallest
   std::uint64_t last = ~std::uint64_t(0);
   std::size_t* last_count = nullptr;
   std::vector<float> spacings;
+  // Every so many points of the job, whichever share they are in: the same
+  // sample at any number of ranks.
   const std::size_t every = std::max<std::size_t>(1, points.census.count >> 20);
-  std::size_t seen = 0;
+  std::size_t seen = points.first;
   points.for_each([&](const PointRecord* r, std::size_t count) {
     for (std::size_t i = 0; i < count; ++i, ++seen) {
       occupancy.add(r[i].position);
@@ -167,6 +180,23 @@ PointSurvey survey(const PointSource& points, const CubeGrid& grid, int smallest
       if (points.census.spacing && seen % every == 0) spacings.push_back(r[i].spacing);
     }
   });
+  if (points.shares) {
+    // Every share's counts, occupied cells and spacings, merged alike on every rank.
+    MessageWriter out;
+    std::vector<std::uint64_t> keys, counts;
+    for (const auto& [b, count] : bins) keys.push_back(b), counts.push_back(count);
+    out.put(keys), out.put(counts), out.put(occupancy.bits()), out.put(spacings);
+    bins.clear(), spacings.clear();
+    std::vector<std::uint64_t> bits;
+    std::vector<float> theirs;
+    for (const std::string& bytes : points.shares->gather_all(out.bytes())) {
+      MessageReader in(bytes);
+      in.get(&keys), in.get(&counts), in.get(&bits), in.get(&theirs);
+      for (std::size_t k = 0; k < keys.size() && k < counts.size(); ++k) bins[keys[k]] += counts[k];
+      occupancy.add_bits(bits);
+      spacings.insert(spacings.end(), theirs.begin(), theirs.end());
+    }
+  }
   for (const auto& [b, count] : bins) {
     std::array<int, 3> c;
     unpack_key(b, &c[0], &c[1], &c[2]);
@@ -284,17 +314,24 @@ bool read_brick(const std::string& path, std::uint64_t key, BrickFile* b) {
 
 // ---- phases ----------------------------------------------------------------
 
-// The points binned by brick in one file of records (points.bins in the work
-// folder), brick after brick, each brick's in input order: a brick gathers
-// its points and halo from its neighbours' runs, and nothing else of the
-// points is in memory.
-struct Bins {
-  std::vector<std::uint32_t> bricks;  // bricks that hold points, ascending
-  std::vector<std::size_t> first;     // their records run [first[i], first[i + 1]) in the file
-  PointCensus census;
+// One file of binned points (in the work folder), brick after brick, each
+// brick's records in input order.
+struct BinFile {
   std::string path;
   int fd = -1;
-  bool owner = true;  // made the file (rank 0), and removes it
+  bool owner = false;                 // made here, and removed with the bins
+  std::vector<std::uint32_t> bricks;  // bricks with points in this file, ascending
+  std::vector<std::size_t> first;     // their records run [first[i], first[i + 1]) in the file
+};
+
+// The points binned by brick: one file, or one per rank of a job whose
+// ranks each binned their share of the points. A brick gathers its points
+// and halo from its neighbours' runs, and nothing else of the points is in
+// memory.
+struct Bins {
+  std::vector<BinFile> files;
+  std::vector<std::uint32_t> bricks;  // bricks that hold points in any file, ascending
+  PointCensus census;                 // of the job's points
   // No point outside this many world units reaches into a brick, under the
   // normal limits and the relaxed ones of hole closing: the base, or more for
   // the bricks that points of wide spacing reach (listed here).
@@ -305,9 +342,11 @@ struct Bins {
   Bins(const Bins&) = delete;
   Bins& operator=(const Bins&) = delete;
   ~Bins() {
-    if (fd >= 0) ::close(fd);
-    std::error_code ec;
-    if (owner && !path.empty()) fs::remove(path, ec);
+    for (BinFile& f : files) {
+      if (f.fd >= 0) ::close(f.fd);
+      std::error_code ec;
+      if (f.owner && !f.path.empty()) fs::remove(f.path, ec);
+    }
   }
   float far(std::uint32_t brick) const {
     const auto it = wide.find(brick);
@@ -319,13 +358,32 @@ struct Bins {
   }
 };
 
+// The bins of rank `rank` of a job whose ranks bin shares of the points; -1: of all points.
+std::string bins_path(const std::string& work_dir, int rank) {
+  const std::string name = rank >= 0 ? "points." + std::to_string(rank) + ".bins" : "points.bins";
+  return (fs::path(work_dir) / name).string();
+}
+
+// Opens a bin file another rank wrote, checking it holds what that rank said.
+void open_bins(BinFile* f, const std::string& rank) {
+  const std::string shared = " (every rank must see the work folder at the same path: on several machines, "
+                             "a shared file system)";
+  f->fd = ::open(f->path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (f->fd < 0) throw InputError(f->path, rank + " cannot read the binned points: " + std::strerror(errno) + shared);
+  struct stat file {};
+  if (::fstat(f->fd, &file) != 0 || std::uint64_t(file.st_size) != f->first.back() * sizeof(PointRecord))
+    throw InputError(f->path, rank + " sees another file than the points that were binned there" + shared);
+}
+
 // Phase 1: points by the brick they lie in, and each brick's halo: the base,
 // or the influence of any point whose influence reaches the brick (a point
 // of wide spacing, at a scan's grazing rim, reaches far). Two passes over the
 // points: counts (and wide reaches), then records to their brick's run,
-// through one small buffer per brick.
+// through one small buffer per brick. Under a job whose ranks spooled shares
+// of the points, each rank bins its share into a file of its own, and the
+// ranks tell each other their files' bricks and the wide reaches.
 void bin_points(const PointSource& points, const BrickPlan& plan, const ReconstructOptions& options,
-                const std::string& path, Bins* bins) {
+                const std::string& work_dir, Bins* bins) {
   const int n = plan.bricks_per_axis;
   const double h = plan.grid.cube_size;
   ReconstructOptions relaxed = options;
@@ -361,28 +419,30 @@ void bin_points(const PointSource& points, const BrickPlan& plan, const Reconstr
           }
     }
   });
-  for (const auto& [b, count] : counts) bins->bricks.push_back(b);
-  std::sort(bins->bricks.begin(), bins->bricks.end());
-  bins->first.push_back(0);
-  for (std::uint32_t b : bins->bricks) bins->first.push_back(bins->first.back() + counts[b]);
+  BinFile& f = bins->files.emplace_back();
+  for (const auto& [b, count] : counts) f.bricks.push_back(b);
+  std::sort(f.bricks.begin(), f.bricks.end());
+  f.first.push_back(0);
+  for (std::uint32_t b : f.bricks) f.first.push_back(f.first.back() + counts[b]);
 
-  bins->path = path;
-  bins->fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (bins->fd < 0) throw InputError(path, "cannot write the binned points: " + std::string(std::strerror(errno)));
+  f.path = bins_path(work_dir, points.shares ? points.shares->rank() : -1);
+  f.owner = true;
+  f.fd = ::open(f.path.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (f.fd < 0) throw InputError(f.path, "cannot write the binned points: " + std::string(std::strerror(errno)));
   // One buffer per brick, 16 MiB in all at most, written out at the brick's cursor when full.
   const std::size_t room = std::clamp<std::size_t>((std::size_t(16) << 20) / sizeof(PointRecord) /
-                                                       std::max<std::size_t>(1, bins->bricks.size()), 16, 4096);
-  std::vector<std::vector<PointRecord>> buffers(bins->bricks.size());
-  std::vector<std::size_t> cursor(bins->first.begin(), bins->first.end() - 1);
+                                                       std::max<std::size_t>(1, f.bricks.size()), 16, 4096);
+  std::vector<std::vector<PointRecord>> buffers(f.bricks.size());
+  std::vector<std::size_t> cursor(f.first.begin(), f.first.end() - 1);
   auto flush = [&](std::size_t c) {
     std::vector<PointRecord>& buffer = buffers[c];
     const char* bytes = reinterpret_cast<const char*>(buffer.data());
     std::size_t left = buffer.size() * sizeof(PointRecord);
     off_t at = off_t(cursor[c] * sizeof(PointRecord));
     while (left > 0) {
-      const ssize_t wrote = ::pwrite(bins->fd, bytes, left, at);
+      const ssize_t wrote = ::pwrite(f.fd, bytes, left, at);
       if (wrote < 0 && errno == EINTR) continue;
-      if (wrote <= 0) throw InputError(path, "cannot write the binned points: " + std::string(std::strerror(errno)));
+      if (wrote <= 0) throw InputError(f.path, "cannot write the binned points: " + std::string(std::strerror(errno)));
       bytes += wrote, left -= std::size_t(wrote), at += wrote;
     }
     cursor[c] += buffer.size();
@@ -390,17 +450,66 @@ void bin_points(const PointSource& points, const BrickPlan& plan, const Reconstr
   };
   last = ~0u;
   std::size_t c = 0;
+  // A share's records are numbered from its first point's index in the job.
+  const std::uint32_t shift = std::uint32_t(points.first);
   points.for_each([&](const PointRecord* r, std::size_t count) {
     for (std::size_t i = 0; i < count; ++i) {
       const std::uint32_t b = brick(r[i].position);
       if (b != last)
-        last = b, c = std::size_t(std::lower_bound(bins->bricks.begin(), bins->bricks.end(), b) - bins->bricks.begin());
+        last = b, c = std::size_t(std::lower_bound(f.bricks.begin(), f.bricks.end(), b) - f.bricks.begin());
       if (buffers[c].capacity() == 0) buffers[c].reserve(room);
       buffers[c].push_back(r[i]);
+      buffers[c].back().index += shift;
       if (buffers[c].size() == room) flush(c);
     }
   });
   for (std::size_t k = 0; k < buffers.size(); ++k) flush(k);
+  if (points.shares) {
+    // Flushed before the other ranks open it: a shared file system makes
+    // writes visible to other machines when they reach its server.
+    if (::fsync(f.fd) != 0) throw InputError(f.path, "cannot flush the binned points: " + std::string(std::strerror(errno)));
+    MessageWriter out;
+    out.put(f.bricks);
+    out.put(std::vector<std::uint64_t>(f.first.begin(), f.first.end()));
+    std::vector<std::uint32_t> wide_bricks;
+    std::vector<float> wide_reach;  // normal and relaxed, brick after brick
+    for (const auto& [b, reach] : bins->wide)
+      wide_bricks.push_back(b), wide_reach.push_back(reach.first), wide_reach.push_back(reach.second);
+    out.put(wide_bricks), out.put(wide_reach);
+    const int me = points.shares->rank();
+    const std::vector<std::string> all = points.shares->gather_all(out.bytes());
+    BinFile mine = std::move(f);
+    bins->files.clear();
+    bins->wide.clear();
+    for (int r = 0; r < int(all.size()); ++r) {
+      if (r == me) {
+        bins->files.push_back(std::move(mine));
+        mine.fd = -1;
+      } else {
+        BinFile& theirs = bins->files.emplace_back();
+        theirs.path = bins_path(work_dir, r);
+        // Rank 0 welds after the others have left: it removes every file.
+        theirs.owner = me == 0;
+      }
+      MessageReader in(all[std::size_t(r)]);
+      BinFile& file = bins->files.back();
+      std::vector<std::uint64_t> first;
+      in.get(&file.bricks), in.get(&first), in.get(&wide_bricks), in.get(&wide_reach);
+      file.first.assign(first.begin(), first.end());
+      if (wide_reach.size() != 2 * wide_bricks.size()) throw std::runtime_error("a message between ranks is cut short");
+      for (std::size_t k = 0; k < wide_bricks.size(); ++k) {
+        const auto [it, fresh] = bins->wide.try_emplace(wide_bricks[k], wide_reach[2 * k], wide_reach[2 * k + 1]);
+        it->second.first = std::max(it->second.first, wide_reach[2 * k]);
+        it->second.second = std::max(it->second.second, wide_reach[2 * k + 1]);
+      }
+      if (r != me) open_bins(&file, "rank " + std::to_string(me));
+    }
+    // Only rank 0 removes the files: the others' may be read by it to the end.
+    if (me != 0) bins->files[std::size_t(me)].owner = false;
+  }
+  for (const BinFile& file : bins->files) bins->bricks.insert(bins->bricks.end(), file.bricks.begin(), file.bricks.end());
+  std::sort(bins->bricks.begin(), bins->bricks.end());
+  bins->bricks.erase(std::unique(bins->bricks.begin(), bins->bricks.end()), bins->bricks.end());
 }
 
 // A brick's points with its halo, in their input order: read from its
@@ -418,20 +527,21 @@ OrientedPoints gather(const Bins& bins, const BrickPlan& plan, std::uint32_t bri
     to[a] = std::min(n - 1, int(std::floor((hi[a] - plan.grid.origin[a]) / side)));
   }
   std::vector<PointRecord> kept, buffer(std::size_t(1) << 14);
+  for (const BinFile& f : bins.files)
   for (int z = from[2]; z <= to[2]; ++z)
     for (int y = from[1]; y <= to[1]; ++y)
       for (int x = from[0]; x <= to[0]; ++x) {
         const std::uint32_t cell = std::uint32_t((z * n + y) * n + x);
-        const auto it = std::lower_bound(bins.bricks.begin(), bins.bricks.end(), cell);
-        if (it == bins.bricks.end() || *it != cell) continue;
-        const std::size_t c = std::size_t(it - bins.bricks.begin());
-        for (std::size_t k = bins.first[c]; k < bins.first[c + 1];) {
-          const std::size_t want = std::min(buffer.size(), bins.first[c + 1] - k);
-          const ssize_t got = ::pread(bins.fd, buffer.data(), want * sizeof(PointRecord), off_t(k * sizeof(PointRecord)));
+        const auto it = std::lower_bound(f.bricks.begin(), f.bricks.end(), cell);
+        if (it == f.bricks.end() || *it != cell) continue;
+        const std::size_t c = std::size_t(it - f.bricks.begin());
+        for (std::size_t k = f.first[c]; k < f.first[c + 1];) {
+          const std::size_t want = std::min(buffer.size(), f.first[c + 1] - k);
+          const ssize_t got = ::pread(f.fd, buffer.data(), want * sizeof(PointRecord), off_t(k * sizeof(PointRecord)));
           if (got < 0 && errno == EINTR) continue;
           if (got <= 0 || std::size_t(got) % sizeof(PointRecord) != 0)
-            throw InputError(bins.path, "cannot read the binned points back: " +
-                                            std::string(got < 0 ? std::strerror(errno) : "the file is short"));
+            throw InputError(f.path, "cannot read the binned points back: " +
+                                         std::string(got < 0 ? std::strerror(errno) : "the file is short"));
           const std::size_t records = std::size_t(got) / sizeof(PointRecord);
           for (std::size_t j = 0; j < records; ++j) {
             const Vec3d p = buffer[j].position.cast<double>();
@@ -670,7 +780,8 @@ void get_vector(MessageReader* in, V* v) { in->get(&v->x()), in->get(&v->y()), i
 void send_plan(WorkSharing& sharing, const BrickPlan& plan, const Bins& bins) {
   // Written before the other ranks open it: flushed for a shared file system
   // that makes writes visible to other machines when they reach its server.
-  if (::fsync(bins.fd) != 0) throw InputError(bins.path, "cannot flush the binned points: " + std::string(std::strerror(errno)));
+  const BinFile& f = bins.files.front();
+  if (::fsync(f.fd) != 0) throw InputError(f.path, "cannot flush the binned points: " + std::string(std::strerror(errno)));
   MessageWriter out;
   out.put(kPlanMessage);
   put_vector(&out, plan.grid.origin);
@@ -682,8 +793,8 @@ void send_plan(WorkSharing& sharing, const BrickPlan& plan, const Bins& bins) {
   out.put(std::uint64_t(c.count));
   put_vector(&out, c.box.min), put_vector(&out, c.box.max);
   out.put(std::uint8_t(c.colors)), out.put(std::uint8_t(c.confidence)), out.put(std::uint8_t(c.spacing)), out.put(c.hash);
-  out.put(bins.bricks);
-  std::vector<std::uint64_t> first(bins.first.begin(), bins.first.end());
+  out.put(f.bricks);
+  std::vector<std::uint64_t> first(f.first.begin(), f.first.end());
   out.put(first);
   out.put(bins.base), out.put(bins.relaxed_base);
   std::vector<std::pair<std::uint32_t, std::pair<float, float>>> wide(bins.wide.begin(), bins.wide.end());
@@ -713,10 +824,12 @@ bool receive_plan(WorkSharing& sharing, BrickPlan* plan, Bins* bins) {
   get_vector(&in, &c.box.min), get_vector(&in, &c.box.max);
   in.get(&colors), in.get(&confidence), in.get(&spacing), in.get(&c.hash);
   c.colors = colors, c.confidence = confidence, c.spacing = spacing;
-  in.get(&bins->bricks);
+  BinFile& f = bins->files.emplace_back();
+  in.get(&f.bricks);
   std::vector<std::uint64_t> first;
   in.get(&first);
-  bins->first.assign(first.begin(), first.end());
+  f.first.assign(first.begin(), first.end());
+  bins->bricks = f.bricks;
   in.get(&bins->base), in.get(&bins->relaxed_base);
   in.get(&wide);
   for (std::uint64_t k = 0; k < wide; ++k) {
@@ -736,8 +849,14 @@ PointSource source_of(const OrientedPoints& points) {
   return {census_of(points), [&points](const RecordVisitor& visit) { for_each_record(points, visit); }};
 }
 
-PointSource source_of(const PointSpool& spool) {
-  return {spool.census(), [&spool](const RecordVisitor& visit) { spool.for_each(visit); }};
+// A spool of the job's points, or of one share of them (PointSpool::join).
+PointSource source_of(const PointSpool& spool, const BrickOptions& bricks) {
+  PointSource source{spool.job_census(), [&spool](const RecordVisitor& visit) { spool.for_each(visit); }};
+  if (spool.shared()) {
+    if (!bricks.sharing) throw std::logic_error("a share of the points without the job's ranks");
+    source.shares = bricks.sharing, source.first = spool.first();
+  }
+  return source;
 }
 
 BrickPlan plan_for(const PointSource& points, const ReconstructOptions& options, const BrickOptions& bricks) {
@@ -787,6 +906,14 @@ BrickPlan plan_for(const PointSource& points, const ReconstructOptions& options,
   plan.estimated_bytes = whole.bytes;
   plan.median_spacing = survey_.median_spacing;
   plan.key = plan_key(points.census, options, B);
+  if (points.shares) {
+    // Each rank made the plan: with other options it would not be rank 0's.
+    MessageWriter out;
+    out.put(plan.key);
+    const std::vector<std::string> keys = points.shares->gather_all(out.bytes());
+    if (keys.front() != out.bytes())
+      throw InputError("", not_rank_zeros_plan(points.shares->rank()));
+  }
   return plan;
 }
 
@@ -816,24 +943,30 @@ Reconstruction bricks_from(const PointSource& points, const ReconstructOptions& 
                                                  " of disk for its bricks and " + binary_size(double(space.available)) +
                                                  " are free there");
   const std::string dir = (fs::path(brick_options.work_dir) / "bricks").string();
-  fs::create_directories(dir, ec);
-  if (ec) throw InputError(brick_options.work_dir, "cannot make the work folder: " + ec.message());
-  // What a killed build was writing: never a finished brick (those are renamed into place).
-  for (const auto& entry : fs::directory_iterator(dir, ec))
-    if (entry.path().filename().string().rfind(".tmp-", 0) == 0) fs::remove(entry.path(), ec);
+  // Rank 0 (or this process alone) readies the folder; the ranks that bin
+  // shares of the points meet after binning, before any brick is written.
+  const bool first_rank = !points.shares || points.shares->rank() == 0;
+  if (first_rank) {
+    fs::create_directories(dir, ec);
+    if (ec) throw InputError(brick_options.work_dir, "cannot make the work folder: " + ec.message());
+    // What a killed build was writing: never a finished brick (those are renamed into place).
+    for (const auto& entry : fs::directory_iterator(dir, ec))
+      if (entry.path().filename().string().rfind(".tmp-", 0) == 0) fs::remove(entry.path(), ec);
+  }
 
   Bins bins;
-  bin_points(points, plan, options, (fs::path(brick_options.work_dir) / "points.bins").string(), &bins);
+  bin_points(points, plan, options, brick_options.work_dir, &bins);
   if (brick_options.points_binned) brick_options.points_binned();
   std::unique_ptr<WorkSharing> alone;
   WorkSharing& sharing = brick_options.sharing ? *brick_options.sharing : *(alone = serial_work_sharing());
-  if (sharing.ranks() > 1) send_plan(sharing, plan, bins);
+  if (sharing.ranks() > 1 && !points.shares) send_plan(sharing, plan, bins);
 
   stats.seconds_index = lap();
 
   BrickStats bs;
   const std::map<std::uint32_t, BrickState> bricks = follow_bricks(bins, plan, options, dir, sharing, &bs);
   stats.seconds_distances = lap();
+  if (!first_rank) return result;  // rank 0 welds
 
   // Phase 4: the bricks welded by lattice edge, and cleaned up as in core.
   WeldedSurface surface(plan.grid);
@@ -949,7 +1082,7 @@ BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& op
 }
 
 BrickPlan plan_bricks(const PointSpool& points, const ReconstructOptions& options, const BrickOptions& bricks) {
-  return plan_for(source_of(points), options, bricks);
+  return plan_for(source_of(points, bricks), options, bricks);
 }
 
 Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const ReconstructOptions& options,
@@ -959,30 +1092,26 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
 
 Reconstruction reconstruct_in_bricks(const PointSpool& points, const ReconstructOptions& options,
                                      const BrickOptions& bricks, BrickStats* stats, const BrickPlan* plan) {
-  return bricks_from(source_of(points), options, bricks, stats, plan);
+  return bricks_from(source_of(points, bricks), options, bricks, stats, plan);
 }
 
 void serve_bricks(const ReconstructOptions& options, const BrickOptions& brick_options) {
   WorkSharing& sharing = *brick_options.sharing;
   BrickPlan plan;
   Bins bins;
-  bins.owner = false;
   if (!receive_plan(sharing, &plan, &bins)) return;
   const std::string rank = "rank " + std::to_string(sharing.rank());
   if (plan.key != plan_key(bins.census, options, plan.brick_cubes))
-    throw InputError("", rank + " has other reconstruction options or another scan2lod than rank 0: "
-                                "start every rank with the same command and program");
-  bins.path = (fs::path(brick_options.work_dir) / "points.bins").string();
-  const std::string shared = " (every rank must see the work folder at the same path: on several machines, "
-                             "a shared file system)";
-  bins.fd = ::open(bins.path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (bins.fd < 0)
-    throw InputError(bins.path, rank + " cannot read the points rank 0 binned: " + std::strerror(errno) + shared);
-  struct stat file {};
-  if (::fstat(bins.fd, &file) != 0 || std::uint64_t(file.st_size) != bins.census.count * sizeof(PointRecord))
-    throw InputError(bins.path, rank + " sees another file than the points rank 0 binned" + shared);
+    throw InputError("", not_rank_zeros_plan(sharing.rank()));
+  BinFile& f = bins.files.front();
+  f.path = bins_path(brick_options.work_dir, -1);
+  open_bins(&f, rank);
   BrickStats stats;
   follow_bricks(bins, plan, options, (fs::path(brick_options.work_dir) / "bricks").string(), sharing, &stats);
+}
+
+void serve_bricks(const PointSpool& share, const ReconstructOptions& options, const BrickOptions& bricks) {
+  bricks_from(source_of(share, bricks), options, bricks, nullptr, nullptr);
 }
 
 void release_brick_workers(WorkSharing* sharing) {

@@ -13,8 +13,10 @@
 // The bricks of one pass are independent work: under MPI (BrickOptions::
 // sharing) they are handed out to the ranks of the job as each asks for the
 // next, and the ranks tell each other after every pass what their bricks
-// asked of their neighbours. Rank 0 reads and bins the points and welds; the
-// other ranks take part through serve_bricks(). Every brick is the one a
+// asked of their neighbours. Each rank reads a share of the input files;
+// rank 0 bins the points and welds, or (when the points are larger than a
+// quarter of the budget) every rank bins the share it read and rank 0 welds.
+// The other ranks take part through serve_bricks(). Every brick is the one a
 // single process computes, so the surface is the same whatever the ranks.
 #pragma once
 
@@ -60,7 +62,9 @@ struct BrickPlan {
 // Throws InputError when not even the smallest brick (4 halos wide) fits,
 // naming the memory it needs.
 BrickPlan plan_bricks(const OrientedPoints& points, const ReconstructOptions& options, const BrickOptions& bricks);
-// The same for points spooled to disk (closed), read in passes.
+// The same for points spooled to disk (closed), read in passes. For one share
+// of a job's points (PointSpool::join) every rank of bricks.sharing calls it,
+// with its own share, and all get the same plan.
 BrickPlan plan_bricks(const PointSpool& points, const ReconstructOptions& options, const BrickOptions& bricks);
 
 struct BrickStats {
@@ -81,7 +85,8 @@ Reconstruction reconstruct_in_bricks(const OrientedPoints& points, const Reconst
                                      const BrickOptions& bricks, BrickStats* stats = nullptr,
                                      const BrickPlan* plan = nullptr);
 // The same for points spooled to disk: what the build holds of them at once
-// is one brick's with its halo, whatever their number.
+// is one brick's with its halo, whatever their number. For one share of a
+// job's points, rank 0's call, while the others serve_bricks(share, ...).
 Reconstruction reconstruct_in_bricks(const PointSpool& points, const ReconstructOptions& options,
                                      const BrickOptions& bricks, BrickStats* stats = nullptr,
                                      const BrickPlan* plan = nullptr);
@@ -92,6 +97,12 @@ Reconstruction reconstruct_in_bricks(const PointSpool& points, const Reconstruct
 // rank 0 builds without bricks (release_brick_workers). `options` must be
 // rank 0's (a plan made with other options is refused).
 void serve_bricks(const ReconstructOptions& options, const BrickOptions& bricks);
+
+// On a rank other than 0, when every rank spooled a share of the points
+// (PointSpool::join): plans with the others, bins its share, and runs the
+// bricks it is handed out, while rank 0 runs reconstruct_in_bricks() on its
+// own share. `options` and `bricks` must be rank 0's.
+void serve_bricks(const PointSpool& share, const ReconstructOptions& options, const BrickOptions& bricks);
 
 // On rank 0: tells the ranks waiting in serve_bricks() that no bricks come.
 // Call it instead of reconstruct_in_bricks() when a build shares its work;

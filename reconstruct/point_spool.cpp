@@ -1,6 +1,7 @@
 #include "reconstruct/point_spool.h"
 
 #include "core/error.h"
+#include "distributed/message.h"
 
 #include <xxhash.h>
 
@@ -114,8 +115,17 @@ void PointSpool::close() {
 
 void PointSpool::for_each(const RecordVisitor& visit) const {
   if (taker_) throw std::logic_error("PointSpool::for_each before close");
-  std::FILE* in = std::fopen(path_.c_str(), "rb");
-  if (!in) throw InputError(path_, "the point spool vanished: " + std::string(std::strerror(errno)));
+  for_each_spooled(path_, census_.count, visit);
+}
+
+void PointSpool::join(const PointCensus& job, std::size_t first) {
+  if (taker_) throw std::logic_error("PointSpool::join before close");
+  shared_ = true, job_ = job, first_ = first;
+}
+
+void for_each_spooled(const std::string& path, std::size_t count, const RecordVisitor& visit) {
+  std::FILE* in = std::fopen(path.c_str(), "rb");
+  if (!in) throw InputError(path, "the point spool vanished: " + std::string(std::strerror(errno)));
   std::vector<PointRecord> buffer(kBufferRecords);
   std::size_t total = 0;
   for (;;) {
@@ -125,9 +135,50 @@ void PointSpool::for_each(const RecordVisitor& visit) const {
     visit(buffer.data(), n);
   }
   std::fclose(in);
-  if (total != census_.count)
-    throw InputError(path_, "the point spool changed during the build: " + std::to_string(total) + " points of " +
-                                std::to_string(census_.count));
+  if (total != count)
+    throw InputError(path, "the point spool changed during the build: " + std::to_string(total) + " points of " +
+                               std::to_string(count));
+}
+
+std::string census_bytes(const PointCensus& c) {
+  MessageWriter out;
+  out.put(std::uint64_t(c.count));
+  for (const Vec3f* v : {&c.box.min, &c.box.max}) out.put(v->x()), out.put(v->y()), out.put(v->z());
+  out.put(std::uint8_t(c.colors | c.confidence << 1 | c.spacing << 2));
+  out.put(c.hash);
+  return std::move(out.bytes());
+}
+
+PointCensus census_from_bytes(const std::string& bytes) {
+  MessageReader in(bytes);
+  PointCensus c;
+  std::uint64_t count = 0;
+  std::uint8_t flags = 0;
+  in.get(&count);
+  for (Vec3f* v : {&c.box.min, &c.box.max}) in.get(&v->x()), in.get(&v->y()), in.get(&v->z());
+  in.get(&flags), in.get(&c.hash);
+  if (!in.done()) throw std::runtime_error("a point census between ranks is longer than expected");
+  c.count = std::size_t(count);
+  c.colors = flags & 1, c.confidence = flags & 2, c.spacing = flags & 4;
+  return c;
+}
+
+PointCensus merge_censuses(const std::vector<PointCensus>& shares) {
+  if (shares.size() == 1) return shares.front();
+  PointCensus job;
+  XXH3_state_t* hash = XXH3_createState();
+  XXH3_64bits_reset(hash);
+  for (const PointCensus& s : shares) {
+    job.count += s.count;
+    if (!s.box.empty()) job.box.extend(s.box.min), job.box.extend(s.box.max);
+    job.colors |= s.colors, job.confidence |= s.confidence, job.spacing |= s.spacing;
+    const std::uint64_t part[2] = {s.hash, std::uint64_t(s.count)};
+    XXH3_64bits_update(hash, part, sizeof part);
+  }
+  job.hash = XXH3_64bits_digest(hash);
+  XXH3_freeState(hash);
+  if (job.count >= (std::size_t(1) << 32)) throw InputError("", "more than 2^32 points in one build: split the input");
+  return job;
 }
 
 void for_each_record(const OrientedPoints& points, const RecordVisitor& visit) {

@@ -60,6 +60,15 @@ class PointSpool {
   const PointCensus& census() const;  // final once closed
   const std::string& path() const { return path_; }
 
+  // Under a job of several processes each spools a share of the points (the
+  // files it read): the job's points are the shares in rank order. `job` is
+  // their census, and this share's first record is the job's point `first`.
+  // Unset, the spool holds every point.
+  void join(const PointCensus& job, std::size_t first);
+  bool shared() const { return shared_; }
+  const PointCensus& job_census() const { return shared_ ? job_ : census(); }
+  std::size_t first() const { return first_; }
+
   // Calls visit(records, n) over all records in order, a buffer at a time.
   void for_each(const RecordVisitor& visit) const;
 
@@ -68,7 +77,21 @@ class PointSpool {
   std::FILE* file_ = nullptr;
   PointCensus census_;                  // once closed
   std::unique_ptr<CensusTaker> taker_;  // while writing
+  bool shared_ = false;
+  PointCensus job_;
+  std::size_t first_ = 0;
 };
+
+// Calls visit(records, n) over the `count` records of a closed spool's file,
+// a buffer at a time: a spool another process of the job wrote.
+void for_each_spooled(const std::string& path, std::size_t count, const RecordVisitor& visit);
+
+// The census as bytes between the processes of a job, and back.
+std::string census_bytes(const PointCensus& census);
+PointCensus census_from_bytes(const std::string& bytes);
+// The census of the shares' points taken together, in order. One share's is
+// its own; the hash of several is one over theirs.
+PointCensus merge_censuses(const std::vector<PointCensus>& shares);
 
 // The records of points in memory, as a spool of them would hold them.
 void for_each_record(const OrientedPoints& points, const RecordVisitor& visit);

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <stdexcept>
 
 namespace scan2lod {
 namespace {
@@ -73,6 +74,26 @@ void CoarseOccupancy::add(const Vec3f& p) {
     const std::uint64_t bit = std::uint64_t(1) << (cell % 64);
     level.cells += (word & bit) == 0;
     word |= bit;
+  }
+}
+
+std::vector<std::uint64_t> CoarseOccupancy::bits() const {
+  std::vector<std::uint64_t> all;
+  for (const Level& level : levels_) all.insert(all.end(), level.bits.begin(), level.bits.end());
+  return all;
+}
+
+void CoarseOccupancy::add_bits(const std::vector<std::uint64_t>& bits) {
+  std::size_t at = 0;
+  for (const Level& level : levels_) at += level.bits.size();
+  if (bits.size() != at) throw std::invalid_argument("occupancy bits of another grid");
+  at = 0;
+  for (Level& level : levels_) {
+    level.cells = 0;
+    for (std::uint64_t& word : level.bits) {
+      word |= bits[at++];
+      level.cells += std::size_t(__builtin_popcountll(word));
+    }
   }
 }
 

@@ -36,6 +36,11 @@ class CoarseOccupancy {
   // The estimate for `points` points (all of them added).
   ReconstructionEstimate estimate(std::size_t points, int resolution, int threads = 0) const;
 
+  // The occupied cells of every level, as bits; and those of another
+  // occupancy over the same box added (the points of another share).
+  std::vector<std::uint64_t> bits() const;
+  void add_bits(const std::vector<std::uint64_t>& bits);
+
  private:
   struct Level {
     CubeGrid grid;

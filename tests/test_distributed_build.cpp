@@ -1,8 +1,9 @@
 // The brick build shared among MPI ranks (`mpirun -np N scan2lod build`) writes
 // the single process's model byte for byte, for 2 ranks and for 3 ranks on
-// fewer cores; and a job one of whose ranks is killed half way resumes from
-// the bricks it finished, again to the same bytes. Registered only when
-// scan2lod was built with MPI.
+// fewer cores, whether rank 0 bins the points every rank read or each rank
+// bins its own share; and a job one of whose ranks is killed half way
+// resumes from the bricks it finished, again to the same bytes. Registered
+// only when scan2lod was built with MPI.
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -32,6 +33,9 @@ namespace {
 // The bunny's scans at a resolution and budget that cut them into at least
 // 8 bricks (checked below), quick enough for several builds in a test.
 const std::string kBuild = " --structure clusters -r 256 --memory 100M -q --json";
+// The same in bricks of 64 cubes, which sends the points by bricks whatever
+// their size: each rank bins the share of the scans it read.
+const std::string kShares = " --brick-cubes 64";
 
 // `mpirun` for `ranks` ranks on this machine: more ranks than cores, and as
 // root (CI containers) too.
@@ -41,11 +45,11 @@ std::string launcher(int ranks) {
 }
 
 // `scan2lod build` of the bunny into dir/name.mco (work folder dir/name.work),
-// alone (ranks 0) or under mpirun.
-std::string build_command(int ranks, const fs::path& dir, const std::string& name) {
+// alone (ranks 0) or under mpirun, with kBuild and `more`.
+std::string build_command(int ranks, const fs::path& dir, const std::string& name, const std::string& more = "") {
   return (ranks > 0 ? launcher(ranks) : std::string()) + SCAN2LOD_CLI + " build " +
-         scan2lod::testing::bunny_scans() + kBuild + " --work-dir " + (dir / (name + ".work")).string() + " -o " +
-         (dir / (name + ".mco")).string();
+         scan2lod::testing::bunny_scans() + kBuild + more + " --work-dir " + (dir / (name + ".work")).string() +
+         " -o " + (dir / (name + ".mco")).string();
 }
 
 std::string bytes_of(const fs::path& path) {
@@ -67,17 +71,28 @@ fs::path fresh_dir(const std::string& name) {
   return dir;
 }
 
-// The single process's model, built once per test process.
+struct Alone {
+  std::string bytes;    // of the model
+  std::int64_t points;  // read
+};
+
+Alone single_process_model_with(const std::string& more, const std::string& name) {
+  const fs::path dir = fresh_dir(name);
+  const CliRun r = run_shell(build_command(0, dir, name, more) + " 2>&1");
+  EXPECT_EQ(r.status, 0) << r.output;
+  const nlohmann::json j = json_of(r);
+  EXPECT_GE(j.value("/bricks/bricks"_json_pointer, 0), 8) << r.output;
+  return {bytes_of(dir / (name + ".mco")), j.value("points", std::int64_t(0))};
+}
+
+// The single process's models, each built once per test process.
 const std::string& single_process_model() {
-  static const std::string bytes = [] {
-    const fs::path dir = fresh_dir("alone");
-    const CliRun r = run_shell(build_command(0, dir, "alone") + " 2>&1");
-    EXPECT_EQ(r.status, 0) << r.output;
-    const nlohmann::json j = json_of(r);
-    EXPECT_GE(j.value("/bricks/bricks"_json_pointer, 0), 8) << r.output;
-    return bytes_of(dir / "alone.mco");
-  }();
-  return bytes;
+  static const Alone alone = single_process_model_with("", "alone");
+  return alone.bytes;
+}
+const Alone& single_process_model_in_shares() {
+  static const Alone alone = single_process_model_with(kShares, "alone_shares");
+  return alone;
 }
 
 // The pid of the rank `rank` of the job writing to `work_dir`, or 0.
@@ -130,13 +145,34 @@ TEST(DistributedBuild, ThreeRanksOnFewerCoresWriteTheSingleProcessModel) {
   EXPECT_TRUE(bytes_of(dir / "three.mco") == alone);
 }
 
+TEST(DistributedBuild, RanksThatBinTheirOwnSharesWriteTheSingleProcessModel) {
+  const Alone& alone = single_process_model_in_shares();
+  ASSERT_FALSE(alone.bytes.empty());
+  for (int ranks : {2, 3}) {
+    const fs::path dir = fresh_dir("shares" + std::to_string(ranks));
+    const CliRun r = run_shell(build_command(ranks, dir, "shares", kShares) + " 2>&1");
+    ASSERT_EQ(r.status, 0) << r.output;
+    const nlohmann::json j = json_of(r);
+    ASSERT_FALSE(j.is_discarded()) << r.output;
+    // Rank 0 counts every rank's points.
+    EXPECT_EQ(j.value("points", std::int64_t(0)), alone.points) << r.output;
+    EXPECT_TRUE(bytes_of(dir / "shares.mco") == alone.bytes) << ranks << " ranks";
+    // Each rank's spool and bins are gone with the job.
+    std::size_t left = 0;
+    for (const auto& entry : fs::directory_iterator(dir / "shares.work"))
+      left += entry.path().extension() == ".spool" || entry.path().extension() == ".bins";
+    EXPECT_EQ(left, 0u);
+  }
+}
+
 TEST(DistributedBuild, AJobWithAKilledRankResumesToTheSameModel) {
-  const std::string& alone = single_process_model();
+  // The ranks bin their own shares: the path of inputs larger than memory.
+  const std::string& alone = single_process_model_in_shares().bytes;
   ASSERT_FALSE(alone.empty());
   const fs::path dir = fresh_dir("killed");
   const std::string work = (dir / "killed.work").string();
   // The launcher itself is the child (exec), so that its end can be waited for.
-  const std::string command = "exec " + build_command(2, dir, "killed") + " >/dev/null 2>&1";
+  const std::string command = "exec " + build_command(2, dir, "killed", kShares) + " >/dev/null 2>&1";
   const char* argv[] = {"sh", "-c", command.c_str(), nullptr};
   pid_t job = 0;
   ASSERT_EQ(posix_spawn(&job, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ), 0);
@@ -156,7 +192,7 @@ TEST(DistributedBuild, AJobWithAKilledRankResumesToTheSameModel) {
   EXPECT_FALSE(fs::exists(dir / "killed.mco"));
 
   // The same command again: the finished bricks are taken as they are.
-  const CliRun r = run_shell(build_command(2, dir, "killed") + " 2>&1");
+  const CliRun r = run_shell(build_command(2, dir, "killed", kShares) + " 2>&1");
   ASSERT_EQ(r.status, 0) << r.output;
   const nlohmann::json j = json_of(r);
   EXPECT_GE(j.value("/bricks/resumed"_json_pointer, 0), 2) << r.output;
@@ -164,14 +200,14 @@ TEST(DistributedBuild, AJobWithAKilledRankResumesToTheSameModel) {
 }
 
 TEST(DistributedBuild, AnErrorOnAnyRankEndsTheJobWithItsMessage) {
-  // Rank 0 cannot read its input: the job ends (no rank waits forever), with
-  // the message and a failing exit code.
+  // The input cannot be read: the job ends (no rank waits forever), with
+  // the message, the rank that met it, and a failing exit code.
   const fs::path dir = fresh_dir("error");
   const CliRun r = run_shell(launcher(2) + SCAN2LOD_CLI + " build " + (dir / "missing.conf").string() + kBuild +
                              " -o " + (dir / "m.mco").string() + " 2>&1");
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find("missing.conf"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("rank 0 of 2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" of 2"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "m.mco"));
   // Rank 1 started with other options refuses rank 0's plan: the same.
   const std::string rank = std::string(SCAN2LOD_CLI) + " build " + scan2lod::testing::bunny_scans() + kBuild +
