@@ -1,55 +1,21 @@
+// scan2lod-full: every command. `scan2lod` runs this program for the
+// commands that need PCL, VTK or Open3D (cli/full_program.h).
+#include "cli/app.h"
 #include "cli/commands.h"
-#include "cli/exit_codes.h"
-#include "cli/terminal.h"
-#include "cli/usage.h"
-#include "core/error.h"
-#include "lod/model_file.h"
-
-#include <cstdio>
-#include <exception>
-#include <new>
-#include <string>
 
 int main(int argc, char** argv) {
   using namespace scan2lod::cli;
-  CLI::App app{"scan2lod: range scans, point clouds and meshes to level-of-detail models"};
-  app.require_subcommand(1);
-  app.fallthrough();
-  app.footer(exit_code_help());
-  app.failure_message(usage_failure_message);
-  app.set_version_flag("--version", std::string("scan2lod ") + SCAN2LOD_VERSION + " (model format " +
-                                        std::to_string(scan2lod::kModelFormatMajor) + "." +
-                                        std::to_string(scan2lod::kModelFormatMinor) + ")");
-  bool quiet = false;
-  app.add_flag("-q,--quiet", quiet, "Print nothing but errors (and the JSON asked for with --json)");
-  app.parse_complete_callback([&] {
-    set_quiet(quiet);
-    if (!quiet) install_terminal_progress();
+  return run_app(argc, argv, [](CLI::App& app) {
+    add_reconstruct_command(app);
+    add_scan_command(app);
+    add_compare_command(app);
+    add_convert_command(app);
+    add_build_command(app);
+    add_extract_command(app);
+    add_export_command(app);
+    add_info_command(app);
+    add_render_command(app);
+    add_plot_command(app);
+    add_view_command(app);
   });
-  add_reconstruct_command(app);
-  add_scan_command(app);
-  add_compare_command(app);
-  add_convert_command(app);
-  add_build_command(app);
-  add_extract_command(app);
-  add_export_command(app);
-  add_info_command(app);
-  add_render_command(app);
-  add_plot_command(app);
-  add_view_command(app);
-  // CLI11 would take a mistyped command for a missing one.
-  if (const std::string unknown = unknown_command_message(app, argc, argv); !unknown.empty()) {
-    std::fprintf(stderr, "scan2lod: error: %s\n", unknown.c_str());
-    return kExitUsage;
-  }
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    // CLI11's own codes (104-114) say which parse rule failed; users and
-    // scripts get one documented code for every usage error.
-    return app.exit(e) == 0 ? kExitOk : kExitUsage;
-  } catch (...) {
-    return print_error();
-  }
-  return kExitOk;
 }

@@ -30,3 +30,5 @@ write_basic_package_version_file(${CMAKE_BINARY_DIR}/scan2lodConfigVersion.cmake
 install(FILES ${CMAKE_BINARY_DIR}/scan2lodConfig.cmake ${CMAKE_BINARY_DIR}/scan2lodConfigVersion.cmake
         DESTINATION ${SCAN2LOD_CMAKE_DIR})
 install(TARGETS scan2lod RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# Where scan2lod looks for it (cli/full_program.cpp): bin/../libexec/scan2lod.
+install(TARGETS scan2lod-full RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/scan2lod)
