@@ -39,7 +39,6 @@ void add_reconstruct_command(CLI::App& app) {
     const ReconstructOptions& options = build.reconstruct;
     check_mesh_output(args->output);
     refuse_overwriting_inputs(args->output, args->inputs);
-    const AcquisitionOptions& acquisition = args->flags.acquisition;
     AcquisitionReport report;
     InputPoints points = load_within_budget(args->inputs, build, &report);
     for (const std::string& warning : report.warnings) warn(warning);

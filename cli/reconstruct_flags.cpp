@@ -39,7 +39,7 @@ void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {
   cmd->add_option("-r,--resolution", o.resolution, "Cubes per side (a power of two, 16 or more)")->capture_default_str();
   cmd->add_option("--margin", o.margin, "Cubes grown around point-holding cubes before surface following")
       ->capture_default_str();
-  cmd->add_option("--distance", flags->method, "Signed distance: planes, hoppe or seed")->capture_default_str();
+  cmd->add_option("--distance", flags->method, "Signed distance: planes, hoppe or closest (the closest point's, as Lee 2007; also spelt seed)")->capture_default_str();
   cmd->add_option("--neighbours", o.distance.neighbours, "Points averaged by the planes distance")
       ->capture_default_str();
   cmd->add_option("--max-distance", o.distance.max_distance,

@@ -15,15 +15,15 @@ constexpr std::size_t kParallelMinimum = 8192;
 }  // namespace
 
 DistanceMethod parse_distance_method(const std::string& name) {
-  if (name == "seed") return DistanceMethod::seed;
+  if (name == "closest" || name == "seed") return DistanceMethod::closest;
   if (name == "hoppe") return DistanceMethod::hoppe;
   if (name == "planes") return DistanceMethod::planes;
-  throw InputError("", "unknown distance method '" + name + "': expected seed, hoppe or planes");
+  throw InputError("", "unknown distance method '" + name + "': expected closest, hoppe or planes");
 }
 
 const char* distance_method_name(DistanceMethod method) {
   switch (method) {
-    case DistanceMethod::seed: return "seed";
+    case DistanceMethod::closest: return "closest";
     case DistanceMethod::hoppe: return "hoppe";
     case DistanceMethod::planes: return "planes";
   }
@@ -150,7 +150,7 @@ void signed_distances(const OrientedPoints& points, const PointIndex& index,
     const Vec3f offset = v - points.positions[p0];
     const float plane = offset.dot(points.normals[p0]);
     switch (options.method) {
-      case DistanceMethod::seed:
+      case DistanceMethod::closest:
         (*distance)[i] = std::copysign(offset.norm(), plane);
         break;
       case DistanceMethod::hoppe:

@@ -11,11 +11,13 @@
 namespace scan2lod {
 
 enum class DistanceMethod {
-  seed,    // sign((v - p)·n_p) * |v - p| with p the closest point (Lee 2007, §4.2)
-  hoppe,   // (v - p)·n_p, the closest point's tangent plane (Hoppe et al. 1992)
-  planes,  // Gaussian-weighted mean of the k closest points' tangent-plane distances
+  closest,  // sign((v - p)·n_p) * |v - p| with p the closest point (Lee 2007, §4.2)
+  hoppe,    // (v - p)·n_p, the closest point's tangent plane (Hoppe et al. 1992)
+  planes,   // Gaussian-weighted mean of the k closest points' tangent-plane distances
 };
 
+// "closest", "hoppe" or "planes"; "seed", the name of "closest" in earlier
+// releases, is kept.
 DistanceMethod parse_distance_method(const std::string& name);
 const char* distance_method_name(DistanceMethod method);
 

@@ -168,7 +168,9 @@ TEST(RangeGrid, HeaderLinesOfNoKeywordAreSkippedWithAWarning) {
   EXPECT_NE(b.warnings[0].find("('bye') and 1 more"), std::string::npos) << b.warnings[0];
   ASSERT_EQ(a.points.size(), b.points.size());
   for (std::size_t i = 0; i < a.points.size(); ++i)
-    if (!std::isnan(a.points[i].x())) EXPECT_EQ(a.points[i], b.points[i]);
+    if (!std::isnan(a.points[i].x())) {
+      EXPECT_EQ(a.points[i], b.points[i]);
+    }
   // A binary scan as bundled: the same points, and the warning reaches the report.
   const std::string bundled = slurp(std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun000.ply");
   fs::path binary = scratch("bun000_bye.ply");
@@ -477,6 +479,8 @@ TEST(ScanSet, ConvertKeepsEverySampleAndPose) {
     EXPECT_TRUE(back[s].pose.translation.isApprox(scans[s].pose.translation, 1e-6f));
     ASSERT_EQ(back[s].image.points.size(), scans[s].image.points.size());
     for (std::size_t i = 0; i < scans[s].image.points.size(); ++i)
-      if (!std::isnan(scans[s].image.points[i].x())) ASSERT_EQ(back[s].image.points[i], scans[s].image.points[i]);
+      if (!std::isnan(scans[s].image.points[i].x())) {
+        ASSERT_EQ(back[s].image.points[i], scans[s].image.points[i]);
+      }
   }
 }

@@ -202,7 +202,9 @@ TEST(CleanOutput, ScannedSphereAndTorusDoNotIntersectThemselves) {
       EXPECT_EQ(self_intersecting_pairs(r.mesh, h), 0u);
       // Open3D's own all-pairs test agrees (2 s on the sphere at R = 64; 16
       // times that at 128).
-      if (resolution == 64) EXPECT_FALSE(to_open3d(r.mesh).IsSelfIntersecting());
+      if (resolution == 64) {
+        EXPECT_FALSE(to_open3d(r.mesh).IsSelfIntersecting());
+      }
     }
   }
 }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 namespace fs = std::filesystem;
@@ -40,6 +41,24 @@ TEST(Cli, ReconstructsTheBundledBunnyWithASummary) {
   // Piped: no progress bar drawn.
   EXPECT_EQ(r.output.find('\r'), std::string::npos);
   EXPECT_GT(fs::file_size(out), 100000u);
+}
+
+TEST(Cli, TheClosestPointDistanceKeepsItsEarlierName) {
+  // --distance closest (Lee's sign x |v - p|) was spelt "seed": both give one surface, unlike hoppe's.
+  std::array<std::string, 3> bytes;
+  const std::array<const char*, 3> names = {"closest", "seed", "hoppe"};
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const fs::path out = scratch() / (std::string("distance_") + names[i] + ".ply");
+    const CliRun r = run_cli("reconstruct " + kScans + " -o " + out.string() + " -r 32 -q --distance " + names[i]);
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::ifstream in(out, std::ios::binary);
+    bytes[i].assign(std::istreambuf_iterator<char>(in), {});
+    EXPECT_GT(bytes[i].size(), 10000u);
+  }
+  EXPECT_TRUE(bytes[0] == bytes[1]);
+  EXPECT_FALSE(bytes[0] == bytes[2]);
+  const CliRun bad = run_cli("reconstruct " + kScans + " -o " + (scratch() / "x.ply").string() + " --distance nearest");
+  EXPECT_NE(bad.output.find("expected closest, hoppe or planes"), std::string::npos) << bad.output;
 }
 
 TEST(Cli, BadInputsFailCleanlyAndWriteNothing) {

@@ -52,7 +52,7 @@ TEST(CliContract, VersionAndExitCodesAreDocumented) {
 TEST(CliContract, QuietIsSilentAndJsonStillAnswers) {
   const std::string model = testing::bunny_model().string();
   const fs::path out = scratch() / "quiet.ply";
-  for (const std::string cmd : {"extract " + model + " --percent 10 -o " + out.string(),
+  for (const std::string& cmd : {"extract " + model + " --percent 10 -o " + out.string(),
                                 "export " + model + " --levels 50,5 -o " + (scratch() / "quiet.glb").string(),
                                 "info " + model,
                                 "reconstruct " + testing::bunny_scans() + " -r 32 -o " + out.string()}) {
@@ -65,7 +65,7 @@ TEST(CliContract, QuietIsSilentAndJsonStillAnswers) {
   }
   // Every command that produces something answers --json.
   const fs::path scans = scratch() / "scans";
-  for (const std::string cmd :
+  for (const std::string& cmd :
        {"build " + testing::bunny_scans() + " -r 32 -o " + (scratch() / "j.mco").string(),
         "convert " + testing::bunny_scans() + " -o " + scans.string(),
         "compare " + out.string() + " " + out.string()}) {
@@ -113,7 +113,9 @@ TEST(CliContract, ATriangleBudgetIsMetWithinTenPercentOrStrictly) {
       EXPECT_LE(strict, budget) << ask;
       EXPECT_TRUE(got == strict || (10 * strict < 9 * budget && got > budget && 10 * got <= 11 * budget))
           << ask << ": " << got << " (at most: " << strict << ")";
-      if (structure == "octree" && budget == 650) EXPECT_GT(got, budget) << "the level with the ears, 694";
+      if (structure == "octree" && budget == 650) {
+        EXPECT_GT(got, budget) << "the level with the ears, 694";
+      }
     }
   const CliRun r = run_cli("extract " + model + " --at-most -o " + out.string());
   EXPECT_EQ(exit_code(r), 2) << "--at-most needs --triangles: " << r.output;
@@ -126,7 +128,7 @@ TEST(CliContract, AnInputIsNeverOverwritten) {
   fs::copy_file(testing::bunny_model(), model, fs::copy_options::overwrite_existing);
   const std::string before = bytes_of(model);
   // The same file by its own name and by another spelling of it.
-  for (const std::string out : {model.string(), (dir / "." / "m.mco").string()}) {
+  for (const std::string& out : {model.string(), (dir / "." / "m.mco").string()}) {
     CliRun r = run_cli("build " + model.string() + " -o " + out);
     EXPECT_EQ(exit_code(r), 1) << r.output;
     EXPECT_NE(r.output.find("is also an input"), std::string::npos) << r.output;

@@ -184,7 +184,8 @@ TEST(CliMessages, ADegenerateCameraIsRefused) {
 // 6. An out-of-range --fov is named with the value given.
 TEST(CliMessages, AFovOutOfRangeNamesTheValue) {
   const std::string out = (scratch() / "fov.ply").string();
-  for (const std::string& fov : {"0", "180", "-5.5"}) {
+  for (const char* value : {"0", "180", "-5.5"}) {
+    const std::string fov = value;
     const CliRun r = run_cli("extract " + model() + " --camera 0,0,1,0,0,0,0,1,0 --fov=" + fov + " -o " + out);
     EXPECT_EQ(exit_code(r), 1) << r.output;
     EXPECT_TRUE(has(r, "--fov must be in (0, 180) degrees, got " + fov)) << r.output;
@@ -195,7 +196,8 @@ TEST(CliMessages, AFovOutOfRangeNamesTheValue) {
 // ignored: a usage error instead.
 TEST(CliMessages, AFlagThatWouldBeIgnoredIsRefused) {
   const fs::path out = scratch() / "ignored.ply";
-  for (const std::string& flag : {"--fov 30", "--height 500", "--pixel-error 2"}) {
+  for (const char* value : {"--fov 30", "--height 500", "--pixel-error 2"}) {
+    const std::string flag = value;
     const CliRun r = run_cli("extract " + model() + " --percent 50 " + flag + " -o " + out.string());
     EXPECT_EQ(exit_code(r), 2) << flag << ": " << r.output;
     const std::string name = flag.substr(0, flag.find(' '));

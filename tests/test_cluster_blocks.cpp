@@ -173,8 +173,9 @@ TEST(ClusterBlocks, PagesHoldEveryClusterACutDrawsAndSurviveTheFile) {
       for (std::size_t c = p.first_cluster; c < p.first_cluster + p.cluster_count; ++c) {
         page_of[c] = i;
         const Cluster& cl = h.clusters[c];
-        if (c > p.first_cluster)
+        if (c > p.first_cluster) {
           EXPECT_EQ(h.clusters[c - 1].first_triangle + h.clusters[c - 1].triangle_count, cl.first_triangle);
+        }
         triangles += cl.triangle_count;
         // The sphere holds the page's geometry.
         for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t)

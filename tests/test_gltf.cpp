@@ -146,7 +146,9 @@ TEST_P(GltfChain, FourLevelsAreOneValidFileSmallerThanFourPlys) {
   for (std::size_t i = 0; i < 4; ++i) {
     const tinygltf::Node& node = m.nodes[std::size_t(i == 0 ? 0 : ids.Get(int(i - 1)).GetNumberAsInt())];
     EXPECT_EQ(index_count(m, node), 3 * j["levels"][i]["triangles"].get<std::size_t>());
-    if (i > 0) EXPECT_LE(coverage.Get(int(i)).GetNumberAsDouble(), coverage.Get(int(i - 1)).GetNumberAsDouble());
+    if (i > 0) {
+      EXPECT_LE(coverage.Get(int(i)).GetNumberAsDouble(), coverage.Get(int(i - 1)).GetNumberAsDouble());
+    }
   }
   EXPECT_EQ(coverage.Get(3).GetNumberAsDouble(), 0.0);
   EXPECT_GT(coverage.Get(0).GetNumberAsDouble(), 0.0);

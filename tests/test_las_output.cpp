@@ -186,7 +186,9 @@ TEST(LasOutput, ReconstructWritesEveryFormatInTheFilesFrame) {
       if (quantized) EXPECT_NEAR(model.nodes[0].translation[std::size_t(k)], las_origin[k], 100.0);
       else EXPECT_EQ(model.nodes[0].translation[std::size_t(k)], las_origin[k]);  // bit for bit
     const std::string report = validator_report(scratch(name));
-    if (!report.empty()) EXPECT_NE(report.find("\"numErrors\":0,\"numWarnings\":0"), std::string::npos) << report;
+    if (!report.empty()) {
+      EXPECT_NE(report.find("\"numErrors\":0,\"numWarnings\":0"), std::string::npos) << report;
+    }
   }
 }
 
@@ -254,7 +256,9 @@ void expect_model_outputs_in_the_files_frame(const Survey& s, const fs::path& mo
   Vec3d origin;
   expect_in_the_files_frame(s, read_mesh(chain.string(), &origin), origin);  // its finest level
   const std::string report = validator_report(chain);
-  if (!report.empty()) EXPECT_NE(report.find("\"numErrors\":0,\"numWarnings\":0"), std::string::npos) << report;
+  if (!report.empty()) {
+    EXPECT_NE(report.find("\"numErrors\":0,\"numWarnings\":0"), std::string::npos) << report;
+  }
   r = run_cli("export " + model.string() + " --levels 100,25 -q -o " + scratch(stem + "_level.ply").string());
   ASSERT_EQ(r.status, 0) << output_error(r);
   for (const char* level : {"_level_LOD0.ply", "_level_LOD1.ply"}) {

@@ -153,10 +153,12 @@ TEST(Tiles, RootIsTheCoarsestCutAndErrorsAreMeasuredAndFallDownward) {
     const float e = t["geometricError"].get<float>();
     EXPECT_TRUE(e == 0 || std::find(errors.begin(), errors.end(), e) != errors.end())
         << "tile " << i << ": geometricError " << e << " is no group's measured error";
-    if (tiles[i].parent >= 0)
+    if (tiles[i].parent >= 0) {
       EXPECT_LE(e, tiles[std::size_t(tiles[i].parent)].tile["geometricError"].get<float>()) << "tile " << i;
-    if (i > 0 && t.contains("content"))
+    }
+    if (i > 0 && t.contains("content")) {
       EXPECT_LE(glb_triangles(dir / t["content"]["uri"].get<std::string>()), kTileTriangles) << "tile " << i;
+    }
     deepest = std::max(deepest, tiles[i].depth);
   }
   EXPECT_GE(deepest, 2);

@@ -79,6 +79,9 @@
 #include "reconstruct/marching_cubes.h"
 
 #include <CLI/CLI.hpp>
+// OpenMesh's properties grow by pushing a default VectorT, which leaves its
+// values uninitialised on purpose; GCC 12 warns where that is inlined here.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
