@@ -17,5 +17,6 @@ void add_info_command(CLI::App& app);     // .mco -> levels and sizes
 void add_render_command(CLI::App& app);   // visualize/: .mco -> PNG montage of levels
 void add_plot_command(CLI::App& app);     // visualize/: .mco -> LOD graphs (PNG)
 void add_view_command(CLI::App& app);     // visualize/: the interactive viewer
+void add_serve_command(CLI::App& app);    // delivery/: a tileset folder over HTTP
 
 }  // namespace scan2lod::cli

@@ -1,8 +1,8 @@
 #include "cli/commands.h"
 #include "cli/terminal.h"
 #include "core/error.h"
-#include "io/mesh_file.h"
-#include "measure/surface_distance.h"
+#include "measure/compare_files.h"
+#include "measure/comparison_json.h"
 
 #include <nlohmann/json.hpp>
 
@@ -12,24 +12,6 @@
 
 namespace scan2lod::cli {
 namespace {
-
-nlohmann::json to_json(const DistanceStats& s) {
-  return {{"mean", s.mean}, {"rms", s.rms}, {"p95", s.p95}, {"max", s.max}, {"samples", s.samples}};
-}
-
-nlohmann::json to_json(const MeshTopology& t) {
-  return {{"vertices", t.vertices},
-          {"triangles", t.triangles},
-          {"referenced_vertices", t.referenced_vertices},
-          {"edges", t.edges},
-          {"boundary_edges", t.boundary_edges},
-          {"boundary_loops", t.boundary_loops},
-          {"non_manifold_edges", t.non_manifold_edges},
-          {"components", t.components},
-          {"largest_component_triangles", t.largest_component_triangles},
-          {"degenerate_triangles", t.degenerate_triangles},
-          {"euler_characteristic", t.euler_characteristic}};
-}
 
 void print_table(const std::string& a, const std::string& b, const SurfaceComparison& c) {
   say("A: %s\nB: %s\nB's bounding-box diagonal: %.6g (percentages below are of it)\n\n",
@@ -88,25 +70,10 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("--seed", args->options.seed, "Sampling seed")->capture_default_str();
   cmd->add_flag("--json", args->json, "Print one JSON object instead of a table");
   cmd->callback([args] {
-    // Georeferenced meshes (double PLY, OBJ text at UTM) are read about a
-    // local origin each; B is moved to A's, in double, so that the two are
-    // compared in one frame without float steps of a metre.
-    Vec3d origin_a, origin_b;
-    const TriangleMesh a = read_mesh(args->a, &origin_a);
-    TriangleMesh b = read_mesh(args->b, &origin_b);
-    if (origin_a != origin_b)
-      for (Vec3f& p : b.positions) p = ((origin_b - origin_a) + p.cast<double>()).cast<float>();
-    SurfaceComparison c;
-    try {
-      c = compare_surfaces(a, b, args->options);
-    } catch (const InputError& e) {
-      // The library cannot know the file names; a user needs them.
-      throw InputError(args->a + " vs " + args->b, e.what());
-    }
+    const MeshPair meshes = read_in_one_frame(args->a, args->b);
+    const SurfaceComparison c = compare_named(meshes.a, meshes.b, args->options, args->a, args->b);
     if (args->json) {
-      nlohmann::json out = {{"a_to_b", to_json(c.a_to_b)}, {"b_to_a", to_json(c.b_to_a)},
-                            {"diagonal", c.diagonal},     {"a", to_json(c.a)},
-                            {"b", to_json(c.b)}};
+      const nlohmann::json out = comparison_json(c);
       std::printf("%s\n", out.dump(2).c_str());
     } else {
       print_table(args->a, args->b, c);

@@ -1,18 +1,20 @@
 // scan2lod export: several levels of a .mco model in one process and one
 // model load. glTF (.glb, .gltf) holds them as one MSFT_lod chain over shared
 // vertices (io/gltf_file.h); a mesh format writes one file per level;
-// --format 3dtiles writes a 3D Tiles 1.1 tileset folder (delivery/tileset.h).
+// --format 3dtiles writes a 3D Tiles 1.1 tileset folder (delivery/tileset.h)
+// and the web page that views it (delivery/viewer_page.h).
 #include "cli/commands.h"
-#include "cli/level_warnings.h"
 #include "cli/outputs.h"
 #include "cli/terminal.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "delivery/tileset.h"
+#include "delivery/viewer_page.h"
 #include "io/gltf_file.h"
 #include "io/mesh_file.h"
 #include "lod/level_chain.h"
 #include "lod/lod_model.h"
+#include "lod/percent_shortfall.h"
 #include "lod/model_file.h"
 
 #include <nlohmann/json.hpp>
@@ -100,6 +102,8 @@ void export_tileset(const TilesetArgs& args) {
   options.glb.generator = std::string("scan2lod ") + SCAN2LOD_VERSION;
   if (ProgressSink sink = progress_sink(); sink && Progress::enabled())
     options.progress = [sink](const std::string& stage, double f) { sink("tiles: " + stage, f, f >= 1); };
+  std::vector<std::string> page;
+  options.add_files = [&page](const std::string& folder) { page = write_viewer_page(folder); };
   const TilesetReport r = write_tileset(model, args.output, options, args.model);
   if (args.json) {
     nlohmann::ordered_json j = {{"structure", "clusters"},
@@ -114,7 +118,8 @@ void export_tileset(const TilesetArgs& args) {
                                 {"largest_tile_triangles", r.largest_tile_triangles},
                                 {"root_triangles", r.root_triangles},
                                 {"root_error", r.root_error},
-                                {"triangles", r.triangles}};
+                                {"triangles", r.triangles},
+                                {"page", page}};
     j["seconds"] = {{"load", load_seconds}, {"plan", r.plan_seconds}, {"write", r.write_seconds}};
     std::printf("%s\n", j.dump(2).c_str());
     return;
@@ -124,6 +129,9 @@ void export_tileset(const TilesetArgs& args) {
       r.tiles, r.content_tiles, r.depth, (long long)r.root_triangles, r.root_error,
       (long long)r.largest_tile_triangles, double(r.bytes) / 1e6, double(r.largest_tile_bytes) / 1e3, load_seconds,
       r.plan_seconds, r.write_seconds, args.output.c_str());
+  if (!page.empty())
+    say("page: %s/index.html; scan2lod serve %s, then open the address it prints\n", args.output.c_str(),
+        args.output.c_str());
 }
 
 }  // namespace
@@ -159,7 +167,7 @@ void add_export_command(CLI::App& app) {
   levels->excludes(budgets);
   cmd->add_option("--format", args->format,
                   "glb, gltf, ply, obj, off, stl or vtp (default: -o's extension), or 3dtiles (-o names a folder: "
-                  "a 3D Tiles 1.1 tileset of the cluster hierarchy)")
+                  "a 3D Tiles 1.1 tileset of the cluster hierarchy, and index.html to view it; see scan2lod serve)")
       ->transform(CLI::IsMember({"glb", "gltf", "ply", "obj", "off", "stl", "vtp", "3dtiles"}, CLI::ignore_case));
   cmd->add_flag("--no-quantize", args->no_quantize, "glTF and 3dtiles: 32-bit float positions and normals");
   const std::vector<CLI::Option*> tileset_flags = {

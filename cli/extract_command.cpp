@@ -2,13 +2,14 @@
 // either LOD structure (lod/lod_model.h): by percent, triangle budget,
 // object-space error, camera, or (octree) priority number.
 #include "cli/commands.h"
-#include "cli/level_warnings.h"
 #include "cli/outputs.h"
 #include "cli/terminal.h"
 #include "core/error.h"
 #include "io/mesh_file.h"
 #include "lod/level_chain.h"
+#include "lod/level_choice.h"
 #include "lod/lod_model.h"
+#include "lod/percent_shortfall.h"
 #include "lod/model_file.h"
 
 #include <nlohmann/json.hpp>
@@ -23,27 +24,8 @@
 namespace scan2lod::cli {
 namespace {
 
-std::string triple(const Vec3f& v) {
-  char text[96];
-  std::snprintf(text, sizeof text, "%g,%g,%g", double(v.x()), double(v.y()), double(v.z()));
-  return text;
-}
-
-// A camera with no view direction, or an up that gives no sideways axis, has
-// no frame to project with: throws InputError naming --camera and the values.
-void require_camera_frame(const CameraView& c) {
-  const Vec3f view = c.target - c.eye;
-  if (!(view.norm() > 0))
-    throw InputError("", "--camera: the eye " + triple(c.eye) + " is the target " + triple(c.target) +
-                             "; the eye must stand away from what it looks at");
-  if (!(c.up.norm() > 0)) throw InputError("", "--camera: up " + triple(c.up) + " has no direction");
-  if (!(view.normalized().cross(c.up.normalized()).norm() > 1e-4f))
-    throw InputError("", "--camera: up " + triple(c.up) + " is parallel to the view direction " + triple(view) +
-                             " (from the eye " + triple(c.eye) + " to the target " + triple(c.target) +
-                             "); give an up across it");
-}
-
 // "EX,EY,EZ,TX,TY,TZ,UX,UY,UZ" -> camera; throws InputError naming --camera.
+// Whether it has a frame is level_request()'s to check (lod/level_choice.h).
 CameraView parse_camera(const std::string& text) {
   std::vector<float> v;
   std::stringstream in(text);
@@ -63,7 +45,6 @@ CameraView parse_camera(const std::string& text) {
   c.eye = Vec3f(v[0], v[1], v[2]);
   c.target = Vec3f(v[3], v[4], v[5]);
   c.up = Vec3f(v[6], v[7], v[8]);
-  require_camera_frame(c);
   return c;
 }
 
@@ -112,44 +93,30 @@ void add_extract_command(CLI::App& app) {
                 "Print {\"structure\", \"triangles\", \"vertices\", \"clusters\", \"priority\", \"error\", "
                 "\"select_seconds\", \"extract_seconds\"} as JSON, with \"warnings\" when there are any");
   cmd->callback([args, percent, triangles, error, camera, priority, camera_flags] {
-    const int given = int(percent->count() > 0) + int(triangles->count() > 0) + int(error->count() > 0) +
-                      int(camera->count() > 0) + int(priority->count() > 0);
-    if (given != 1)
-      throw InputError("", "extract needs exactly one of --percent, --triangles, --error, --camera and --priority, got " +
-                               std::to_string(given));
-    if (percent->count() && !(args->percent >= 0 && args->percent <= 100))
-      throw InputError("", "--percent must be between 0 and 100, got " + percent->as<std::string>());
-    if (triangles->count() && args->triangles < 0)
-      throw InputError("", "--triangles must not be negative, got " + std::to_string(args->triangles));
-    if (priority->count() && args->priority < 0)
-      throw InputError("", "--priority must not be negative, got " + std::to_string(args->priority));
-    if (error->count() && !(args->error >= 0 && std::isfinite(args->error)))
-      throw InputError("", "--error must be a finite number >= 0, got " + error->as<std::string>());
     for (const CLI::Option* flag : camera_flags)
       if (flag->count() && !camera->count()) {
         const CLI::Option* asked = percent->count() ? percent : triangles->count() ? triangles
                                                               : error->count()   ? error
-                                                                                 : priority;
-        throw CLI::ValidationError(flag->get_name(), "applies to --camera only; " + asked->get_name() +
-                                                         " takes no camera, so it would be ignored");
+                                                              : priority->count() ? priority
+                                                                                 : nullptr;
+        if (asked)
+          throw CLI::ValidationError(flag->get_name(), "applies to --camera only; " + asked->get_name() +
+                                                           " takes no camera, so it would be ignored");
       }
-    if (!(args->fov > 0 && args->fov < 180))
-      throw InputError("", "--fov must be in (0, 180) degrees, got " + camera_flags[0]->as<std::string>());
-    if (args->height < 1) throw InputError("", "--height must be >= 1, got " + camera_flags[1]->as<std::string>());
-    if (!(args->pixel_error > 0))
-      throw InputError("", "--pixel-error must be > 0, got " + camera_flags[2]->as<std::string>());
-    LevelRequest request;
-    if (percent->count()) request = LevelRequest::at_percent(args->percent);
-    else if (triangles->count())
-      request = args->at_most ? LevelRequest::at_most_triangles(args->triangles) : LevelRequest::at_triangles(args->triangles);
-    else if (error->count()) request = LevelRequest::at_error(args->error);
-    else if (priority->count()) request = LevelRequest::at_priority(std::size_t(args->priority));
-    else {
+    LevelChoice choice;
+    if (percent->count()) choice.percent = args->percent;
+    if (triangles->count()) choice.triangles = args->triangles;
+    choice.at_most = args->at_most;
+    if (error->count()) choice.error = args->error;
+    if (priority->count()) choice.priority = args->priority;
+    if (camera->count()) {
       CameraView view = parse_camera(args->camera);
       view.fov_degrees = float(args->fov);
       view.height = args->height;
-      request = LevelRequest::for_camera(view, args->pixel_error);
+      choice.camera = view;
     }
+    choice.pixel_error = args->pixel_error;
+    const LevelRequest request = level_request(choice, OptionSpelling::kCommandLine);
     check_mesh_output(args->output);
     refuse_overwriting_inputs(args->output, {args->model});
 

@@ -30,7 +30,7 @@ bool needs_full_program(int argc, char** argv) {
     if (argv[i][0] != '-') command = argv[i];  // the options before a command take no value
   if (!command) return true;
   const std::string name = command;
-  if (name != "info" && name != "extract" && name != "export") return true;
+  if (name != "info" && name != "extract" && name != "export" && name != "serve") return true;
   for (int i = 1; i < argc; ++i)
     if (ends_with_vtp(argv[i])) return true;
   return false;

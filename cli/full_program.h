@@ -6,7 +6,7 @@
 namespace scan2lod::cli {
 
 // Whether the command line needs scan2lod-full: no command (the help of all),
-// a command other than info, extract and export, or a .vtp file (VTK's).
+// a command other than info, extract, export and serve, or a .vtp file (VTK's).
 bool needs_full_program(int argc, char** argv);
 
 // Replaces this process with scan2lod-full and the same arguments (the same

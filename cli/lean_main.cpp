@@ -1,4 +1,4 @@
-// scan2lod: the commands that only read models (info, extract, export) run
+// scan2lod: the commands that only read models (info, extract, export, serve) run
 // here, in a program that maps no PCL, VTK or Open3D library (about 170
 // shared objects, most of a short command's start); every other command, and
 // any that names a .vtp file, runs in scan2lod-full (cli/full_program.h).
@@ -13,5 +13,6 @@ int main(int argc, char** argv) {
     add_extract_command(app);
     add_export_command(app);
     add_info_command(app);
+    add_serve_command(app);
   });
 }

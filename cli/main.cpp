@@ -17,5 +17,6 @@ int main(int argc, char** argv) {
     add_render_command(app);
     add_plot_command(app);
     add_view_command(app);
+    add_serve_command(app);
   });
 }

@@ -75,10 +75,7 @@ void require_surface(const std::vector<std::string>& inputs, const Reconstructio
   if (!r.mesh.triangles.empty()) return;
   std::string names;
   for (const std::string& input : inputs) names += (names.empty() ? "" : ", ") + input;
-  throw InputError(names, "no surface at resolution " + std::to_string(resolution) + ": " +
-                              std::to_string(r.stats.points) + " points, " + std::to_string(r.stats.cubes_touched) +
-                              " cubes near them, none crossed by the surface (too few or too sparse points for "
-                              "this resolution: try a coarser --resolution)");
+  throw InputError(names, no_surface_message(r, resolution, "--resolution"));
 }
 
 }  // namespace scan2lod::cli

@@ -22,8 +22,9 @@ namespace scan2lod::cli {
 void add_render_command(CLI::App& app) {
   struct Args {
     std::string model, output, percents = "100,80,60,40,20", size = "400x400", mode = "both", structure;
+    std::string camera;
     double azimuth = 0, elevation = 0;
-    bool json = false;
+    bool json = false, no_captions = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("render", "Levels of a .mco model -> one PNG montage (off-screen)");
@@ -42,6 +43,12 @@ void add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--azimuth", args->azimuth, "Turn the camera about the up axis (degrees)")->capture_default_str();
   cmd->add_option("--elevation", args->elevation, "Raise the camera (degrees)")->capture_default_str();
+  CLI::Option* camera =
+      cmd->add_option("--camera", args->camera,
+                      "A camera in full instead of the framing: EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV (eye, target, up, "
+                      "vertical field of view in degrees) in the inputs' frame, as the web page's camera");
+  for (CLI::Option* turn : {cmd->get_option("--azimuth"), cmd->get_option("--elevation")}) turn->excludes(camera);
+  cmd->add_flag("--no-captions", args->no_captions, "No caption under each panel");
   cmd->add_flag("--json", args->json, "Print the panels as JSON");
   cmd->callback([args] {
     MontageOptions options;
@@ -50,6 +57,8 @@ void add_render_command(CLI::App& app) {
     options.mode = parse_render_mode(args->mode);
     options.azimuth = args->azimuth;
     options.elevation = args->elevation;
+    if (!args->camera.empty()) options.camera = parse_view_camera(args->camera, "--camera");
+    options.captions = !args->no_captions;
     check_png_output(args->output);
     check_output_path(args->output);
     const LodModel model = load_model(args->model);  // file errors first, then the display

@@ -162,6 +162,7 @@ TilesetReport write_tileset(const LodModel& model, const std::string& dir, const
                                         options.glb.generator);
   write_file(staging.path / "tileset.json", text.data(), text.size(), dir);
   report.bytes += text.size();
+  if (options.add_files) options.add_files(staging.path.string());
 
   // Into place: an old tileset moves aside first and goes once the new one is there.
   const fs::path old = parent / ("." + target.filename().string() + ".old-" + std::to_string(::getpid()));

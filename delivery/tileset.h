@@ -36,6 +36,11 @@ struct TilesetOptions {
   // Called with a stage's name ("plan", "write") and how far it is (0 to 1);
   // may be empty.
   std::function<void(const std::string&, double)> progress;
+  // Called with the folder being written (not yet in place) after the tiles
+  // and tileset.json, to put more files beside them (the command line adds
+  // the viewer page, viewer_page.h); may be empty. What it throws ends the
+  // write as a failed one.
+  std::function<void(const std::string& folder)> add_files;
 };
 
 struct TilesetReport {

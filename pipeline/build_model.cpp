@@ -351,10 +351,7 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
     report.reconstruct = r.stats;
     report.warnings.insert(report.warnings.end(), r.warnings.begin(), r.warnings.end());
     if (r.mesh.triangles.empty())
-      throw InputError(source, "no surface at resolution " + std::to_string(options.reconstruct.resolution) + ": " +
-                               std::to_string(r.stats.points) + " points, " + std::to_string(r.stats.cubes_touched) +
-                               " cubes near them, none crossed by the surface (too few or too sparse points for "
-                               "this resolution: try a coarser --resolution)");
+      throw InputError(source, no_surface_message(r, options.reconstruct.resolution, "--resolution"));
   }
   release();
   report.seconds_reconstruct = seconds_since(stage);

@@ -885,6 +885,13 @@ void clean_up(SurfaceBuilder& builder, const ReconstructOptions& options, Recons
 
 }  // namespace
 
+std::string no_surface_message(const Reconstruction& r, int resolution, const std::string& resolution_flag) {
+  return "no surface at resolution " + std::to_string(resolution) + ": " + std::to_string(r.stats.points) +
+         " points, " + std::to_string(r.stats.cubes_touched) +
+         " cubes near them, none crossed by the surface (too few or too sparse points for this resolution: try a "
+         "coarser " + resolution_flag + ")";
+}
+
 Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOptions& options) {
   check_points(points);
   Reconstruction result;

@@ -93,6 +93,11 @@ struct Reconstruction {
 // whose estimated memory exceeds options.memory_limit (check_resolution_fits).
 Reconstruction reconstruct(const OrientedPoints& points, const ReconstructOptions& options = {});
 
+// What a caller says of a reconstruction with no triangle at `resolution`:
+// its points and the cubes near them, and to try a coarser one, named as the
+// caller's user gives it (`resolution_flag`: "--resolution", "resolution").
+std::string no_surface_message(const Reconstruction& r, int resolution, const std::string& resolution_flag);
+
 // Area-weighted vertex normals of a mesh (unit length; zero for unused vertices).
 std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh);
 

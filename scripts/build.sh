@@ -3,7 +3,7 @@
 #   scripts/build.sh demo   install what is missing, build, reconstruct the bundled bunny,
 #                           build its LOD model and extract a level
 #   scripts/build.sh test   the same, then run the test suite
-#   scripts/build.sh deps   only install the packages (and the npm glTF validator)
+#   scripts/build.sh deps   only install the packages (and the tests' npm packages)
 # BUILD_DIR (default build) and JOBS (default nproc) can be set in the environment.
 set -euo pipefail
 
@@ -18,9 +18,11 @@ packages=(
   libeigen3-dev liblz4-dev
   libpcl-dev libopen3d-dev libopenmesh-dev libflann-dev libvtk9-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
-  libmeshoptimizer-dev libmetis-dev libtinygltf-dev libxxhash-dev
+  libmeshoptimizer-dev libmetis-dev libtinygltf-dev libxxhash-dev libcpp-httplib-dev
+  chromium
   xvfb xauth libgl1-mesa-dri
   libopenmpi-dev openmpi-bin
+  python3-dev pybind11-dev python3-numpy python3-pytest
 )
 
 install_deps() {
@@ -40,20 +42,35 @@ install_deps() {
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
-# The Khronos glTF-Validator (npm gltf-validator), which the tests run on every
-# glTF file scan2lod writes; into the build folder, version pinned in
-# tests/gltf/package.json. Node.js comes from Debian if the machine has none.
-install_validator() {
-  if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
-    local sudo=""
-    [ "$(id -u)" -eq 0 ] || sudo="sudo"
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null
-  fi
+# Node.js and npm from Debian when the machine has no node (a NodeSource
+# nodejs carries its own npm, which Debian's npm package would conflict with).
+# The build needs npm for the viewer page (delivery/CMakeLists.txt), the tests
+# need node.
+install_node() {
+  command -v node >/dev/null && command -v npm >/dev/null && return
+  local sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null
+}
+
+# The tests' npm packages, into the build folder: the Khronos glTF-Validator
+# (npm gltf-validator, version pinned in tests/gltf/package.json), which the
+# tests run on every glTF file scan2lod writes, and the web viewers' tests'
+# puppeteer-core, pngjs and cesium (pinned by tests/web/package-lock.json),
+# which drive Debian's chromium (the package list above).
+install_test_packages() {
   local prefix="$build_dir/npm"
-  [ -f "$prefix/node_modules/gltf-validator/package.json" ] && return
-  mkdir -p "$prefix"
-  cp tests/gltf/package.json "$prefix/"
-  npm install --prefix "$prefix" --no-audit --no-fund --silent >/dev/null
+  if [ ! -f "$prefix/node_modules/gltf-validator/package.json" ]; then
+    mkdir -p "$prefix"
+    cp tests/gltf/package.json "$prefix/"
+    npm install --prefix "$prefix" --no-audit --no-fund --silent >/dev/null
+  fi
+  local web="$build_dir/npm-web"
+  if ! cmp -s tests/web/package-lock.json "$web/package-lock.json" || [ ! -d "$web/node_modules" ]; then
+    mkdir -p "$web"
+    cp tests/web/package.json tests/web/package-lock.json "$web/"
+    npm ci --prefix "$web" --no-audit --no-fund --loglevel=error >/dev/null
+  fi
 }
 
 build() {
@@ -76,9 +93,13 @@ demo() {
   "$build_dir/bin/scan2lod" extract out/bunny.mco --structure octree --percent 20 -o out/bunny_20.ply
   # Delivery: four levels in one glTF file (MSFT_lod over shared vertices).
   "$build_dir/bin/scan2lod" export out/bunny.mco --levels 100,25,5,1 -o out/bunny.glb
+  # A 3D Tiles 1.1 tileset and its web page: scan2lod serve out/bunny_tiles shows it.
+  "$build_dir/bin/scan2lod" export out/bunny.mco --format 3dtiles -o out/bunny_tiles
 }
 
 run_tests() {
+  # CTest runs the GoogleTest suite and, as the test Python.Pytest, the
+  # Python package's pytest suite (python/tests) against build/python.
   # Tests render with VTK; give them a display when there is none.
   local xvfb=()
   if [ -z "${DISPLAY:-}" ] && command -v xvfb-run >/dev/null; then xvfb=(xvfb-run -a); fi
@@ -86,8 +107,8 @@ run_tests() {
 }
 
 case "${1:-demo}" in
-  deps) install_deps; install_validator ;;
-  demo) install_deps; build; demo ;;
-  test) install_deps; install_validator; build; demo; run_tests ;;
+  deps) install_deps; install_node; install_test_packages ;;
+  demo) install_deps; install_node; build; demo ;;
+  test) install_deps; install_node; install_test_packages; build; demo; run_tests ;;
   *) echo "usage: scripts/build.sh [demo|test|deps]" >&2; exit 2 ;;
 esac

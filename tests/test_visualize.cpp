@@ -2,11 +2,13 @@
 // rendered off-screen (the tests run under xvfb-run), read back from the PNG,
 // and measured: how much of a panel the object covers, how dense the
 // wireframe's edges are, whether two renders agree to the pixel.
+#include "core/error.h"
 #include "lod/model_file.h"
 #include "visualize/levels.h"
 #include "visualize/montage.h"
 #include "visualize/octree_cells.h"
 #include "visualize/plots.h"
+#include "visualize/scene.h"
 
 #include "test_support.h"
 
@@ -118,6 +120,25 @@ TEST(VisualizeLevels, PercentListsAreParsedStrictly) {
     EXPECT_THROW(scan2lod::parse_size(bad, "--size", &w, &h), std::runtime_error) << bad;
 }
 
+// render --camera: ten numbers, or an error that names the flag and what it expects.
+TEST(VisualizeRender, ACameraGivenInFullIsReadOrRefusedByName) {
+  const scan2lod::ViewCamera v = scan2lod::parse_view_camera("1,2,3,0,0,0.5,0,1,0,35", "--camera");
+  EXPECT_EQ(v.eye, scan2lod::Vec3d(1, 2, 3));
+  EXPECT_EQ(v.target, scan2lod::Vec3d(0, 0, 0.5));
+  EXPECT_EQ(v.up, scan2lod::Vec3d(0, 1, 0));
+  EXPECT_EQ(v.fov_degrees, 35);
+  for (const char* bad : {"", "1,2,3,0,0,0,0,1,0", "1,2,3,0,0,0,0,1,0,35,1", "1,2,3,0,0,0,0,1,0,x", "1,2,3,,0,0,0,1,0,35",
+                          "1,2,3,1,2,3,0,1,0,35", "0,0,1,0,0,0,0,0,2,35", "1,2,3,0,0,0,0,1,0,180",
+                          "1,2,3,0,0,0,0,1,0,nan"}) {
+    try {
+      scan2lod::parse_view_camera(bad, "--camera");
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const scan2lod::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--camera"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(VisualizeLevels, TheCutCoversTheSurfaceOnceAtEveryPriority) {
   // Every leaf lies below exactly one node of the cut, whatever the priority.
   // (octree_cells reads the octree's arrays, so its test does too.)
@@ -138,8 +159,12 @@ TEST(VisualizeLevels, TheCutCoversTheSurfaceOnceAtEveryPriority) {
       for (std::int64_t a = std::int64_t(n); a >= 0; a = t.nodes.parents[std::size_t(a)]) hits += covered[std::size_t(a)];
       ASSERT_EQ(hits, 1) << "leaf " << n << " at priority " << p;
     }
-    if (p == 0) EXPECT_EQ(cut, std::vector<std::int32_t>{0});
-    if (p == lod.full()) EXPECT_EQ(cut.size(), leaves);
+    if (p == 0) {
+      EXPECT_EQ(cut, std::vector<std::int32_t>{0});
+    }
+    if (p == lod.full()) {
+      EXPECT_EQ(cut.size(), leaves);
+    }
   }
 }
 
@@ -165,10 +190,12 @@ TEST(VisualizeLevels, LevelSourceGivesTheFacesLevelsOfEitherStructure) {
       EXPECT_EQ(a, b) << scan2lod::structure_name(s) << " " << percent;
       const std::vector<std::uint8_t> levels = source.triangle_levels();
       ASSERT_EQ(levels.size(), a.size());
-      if (s == scan2lod::LodStructure::kClusters && percent == 100.0)
+      if (s == scan2lod::LodStructure::kClusters && percent == 100.0) {
         EXPECT_EQ(*std::max_element(levels.begin(), levels.end()), 0);
-      if (s == scan2lod::LodStructure::kClusters && percent == 0.0)
+      }
+      if (s == scan2lod::LodStructure::kClusters && percent == 0.0) {
         EXPECT_GT(*std::max_element(levels.begin(), levels.end()), 0);
+      }
     }
   }
   EXPECT_EQ(scan2lod::structure_named(model, "", "m.mco"), scan2lod::LodStructure::kClusters);

@@ -62,8 +62,15 @@ Montage render_montage(const LodModel& model, LodStructure structure, const std:
   window->SetSize(montage.width, montage.height);
 
   vtkNew<vtkCamera> camera;
-  frame_camera(camera, model_bounds(model), options.azimuth, options.elevation,
-               double(options.panel_width) / double(options.panel_height));
+  if (options.camera) {
+    ViewCamera local = *options.camera;  // into the model's frame
+    local.eye -= model.origin;
+    local.target -= model.origin;
+    place_camera(camera, local, model_bounds(model));
+  } else {
+    frame_camera(camera, model_bounds(model), options.azimuth, options.elevation,
+                 double(options.panel_width) / double(options.panel_height));
+  }
 
   LevelSource source(model, structure);
   Progress progress("render", percents.size());
@@ -109,6 +116,8 @@ Montage render_montage(const LodModel& model, LodStructure structure, const std:
         style_shaded(actor->GetProperty());
       }
       renderer->AddActor(actor);
+      window->AddRenderer(renderer);
+      if (!options.captions) continue;
       vtkNew<vtkTextActor> text;
       text->SetInput(caption);
       vtkTextProperty* tp = text->GetTextProperty();
@@ -120,7 +129,6 @@ Montage render_montage(const LodModel& model, LodStructure structure, const std:
       text->GetPositionCoordinate()->SetCoordinateSystemToNormalizedViewport();
       text->GetPositionCoordinate()->SetValue(0.5, 0.02);
       renderer->AddViewProp(text);
-      window->AddRenderer(renderer);
     }
     progress.advance();
   }

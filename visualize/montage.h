@@ -5,8 +5,10 @@
 #pragma once
 
 #include "lod/lod_model.h"
+#include "visualize/scene.h"
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +27,10 @@ struct MontageOptions {
   // before framing on the whole model's box.
   double azimuth = 0;
   double elevation = 0;
+  // A camera given in full instead (azimuth and elevation then unused), in
+  // the inputs' frame (the model's origin added, as a tileset's frame is).
+  std::optional<ViewCamera> camera;
+  bool captions = true;  // each panel's LOD %, triangles and vertices
 };
 
 // Where one panel sits in the picture (pixels, origin top-left) and what it shows.

@@ -3,8 +3,12 @@
 #include <vtkCamera.h>
 #include <vtkProperty.h>
 
+#include "core/error.h"
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <vector>
 
 namespace scan2lod {
 
@@ -24,6 +28,45 @@ void frame_camera(vtkCamera* camera, const Aabb& box, double azimuth, double ele
   camera->Elevation(elevation);
   camera->OrthogonalizeViewUp();
   camera->SetClippingRange(std::max(distance - 1.5 * radius, 0.01 * radius), distance + 1.5 * radius);
+}
+
+void place_camera(vtkCamera* camera, const ViewCamera& view, const Aabb& box) {
+  camera->SetViewAngle(view.fov_degrees);  // vertical, as UseHorizontalViewAngle is off
+  camera->SetPosition(view.eye.x(), view.eye.y(), view.eye.z());
+  camera->SetFocalPoint(view.target.x(), view.target.y(), view.target.z());
+  camera->SetViewUp(view.up.x(), view.up.y(), view.up.z());
+  camera->OrthogonalizeViewUp();
+  const Vec3d centre = box.empty() ? view.target : Vec3d((0.5f * (box.min + box.max)).cast<double>());
+  const double radius = std::max(1e-6, box.empty() ? 1.0 : 0.5 * double(box.diagonal()));
+  const double distance = (view.eye - centre).norm();
+  camera->SetClippingRange(std::max(distance - 1.5 * radius, 1e-3 * radius), distance + 1.5 * radius);
+}
+
+ViewCamera parse_view_camera(const std::string& text, const std::string& flag) {
+  const std::string expected = flag + " expects EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV (eye, target, up, vertical field of "
+                                      "view in degrees), got '" + text + "'";
+  std::vector<double> v;
+  std::size_t at = 0;
+  for (bool last = false; !last; at += 1) {
+    std::size_t end = text.find(',', at);
+    last = end == std::string::npos;
+    if (last) end = text.size();
+    const std::string field = text.substr(at, end - at);
+    char* stop = nullptr;
+    const double value = std::strtod(field.c_str(), &stop);
+    if (field.empty() || *stop != '\0' || !std::isfinite(value)) throw InputError("", expected);
+    v.push_back(value);
+    at = end;
+  }
+  if (v.size() != 10) throw InputError("", expected);
+  ViewCamera view{Vec3d(v[0], v[1], v[2]), Vec3d(v[3], v[4], v[5]), Vec3d(v[6], v[7], v[8]), v[9]};
+  const Vec3d forward = view.target - view.eye;
+  if (forward.norm() == 0) throw InputError("", flag + ": the eye is at the target; " + expected);
+  if (forward.normalized().cross(view.up).norm() < 1e-6)
+    throw InputError("", flag + ": up must not lie along the view; " + expected);
+  if (!(view.fov_degrees > 0 && view.fov_degrees < 180))
+    throw InputError("", flag + ": the field of view must be between 0 and 180 degrees; " + expected);
+  return view;
 }
 
 void style_shaded(vtkProperty* p) {

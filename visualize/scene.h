@@ -19,6 +19,24 @@ namespace scan2lod {
 // of a model is seen from one place.
 void frame_camera(vtkCamera* camera, const Aabb& box, double azimuth, double elevation, double aspect);
 
+// A camera given in full: a perspective view from `eye` towards `target`
+// with `up` (made perpendicular to the view), and a vertical field of view,
+// as three.js's PerspectiveCamera and CesiumJS's take it, so that a picture
+// here and one in a browser can be compared pixel for pixel.
+struct ViewCamera {
+  Vec3d eye = Vec3d(0, 0, 1), target = Vec3d::Zero(), up = Vec3d(0, 1, 0);
+  double fov_degrees = 30;
+};
+
+// Puts `camera` where `view` says, with clipping planes around `box` (which
+// the view need not frame).
+void place_camera(vtkCamera* camera, const ViewCamera& view, const Aabb& box);
+
+// Parses "EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV" (eye, target, up, vertical field of
+// view in degrees). Throws InputError naming `flag` unless it is ten finite
+// numbers with eye != target, up not along the view, and 0 < FOV < 180.
+ViewCamera parse_view_camera(const std::string& text, const std::string& flag);
+
 // Light ivory, Gouraud-shaded with a little specular: the shaded panels.
 void style_shaded(vtkProperty* property);
 // Thin near-black unlit lines: the wireframe panels.

@@ -1,11 +1,11 @@
-#include "cli/level_warnings.h"
+#include "lod/percent_shortfall.h"
 
 #include "lod/level_budget.h"
 
 #include <cmath>
 #include <cstdio>
 
-namespace scan2lod::cli {
+namespace scan2lod {
 namespace {
 
 std::string number(const char* format, double value) {
@@ -44,4 +44,4 @@ std::string percent_shortfall(const LodModel& model, LodStructure structure, con
          ", " + std::to_string(cut.triangles.size()) + " triangles)";
 }
 
-}  // namespace scan2lod::cli
+}  // namespace scan2lod

@@ -1,11 +1,13 @@
-// What the command line says about a level that misses what was asked of it.
+// What a caller is told about a level that misses the percent asked of it:
+// the command line prints it as a warning, the Python package raises it as a
+// UserWarning.
 #pragma once
 
 #include "lod/lod_model.h"
 
 #include <string>
 
-namespace scan2lod::cli {
+namespace scan2lod {
 
 // Where `cut` answered a percentage P (`asker` P: "--percent", "--levels")
 // with a level more than 10 % away from P % (lod/level_budget.h, the tolerance
@@ -15,4 +17,4 @@ namespace scan2lod::cli {
 std::string percent_shortfall(const LodModel& model, LodStructure structure, const std::string& asker, double percent,
                               const LevelCut& cut);
 
-}  // namespace scan2lod::cli
+}  // namespace scan2lod
