@@ -11,15 +11,14 @@ import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import {
   Checks, cameraArgument, framingDistance, intersectionOverUnion, kHeight, kWidth, launchBrowser, pngFromDataUrl,
-  runScan2lod, serve, settle, silhouette, tilesetSphere, viewFrom, watchPage, webModules,
+  runScan2lod, serve, settle, silhouette, stopwatch, tilesetSphere, viewFrom, watchPage, webModules,
 } from './support.mjs';
 
 const [scan2lod, dir, modules] = process.argv.slice(2);
 const { puppeteer, PNG } = webModules(modules);
 const checks = new Checks('CesiumJS');
 const here = path.dirname(fileURLToPath(import.meta.url));
-const started = Date.now();
-const seconds = () => ((Date.now() - started) / 1000).toFixed(1);
+const seconds = stopwatch();
 
 // The served folder: the page, Cesium (without its 10 MB of ES-module
 // copies, which the page does not load) and the tileset.

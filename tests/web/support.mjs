@@ -22,6 +22,12 @@ export function webModules(modulesDir) {
   return { puppeteer: require('puppeteer-core'), PNG: require('pngjs').PNG };
 }
 
+// Seconds since the call, as text with one decimal: the scripts' timing lines.
+export function stopwatch() {
+  const started = Date.now();
+  return () => ((Date.now() - started) / 1000).toFixed(1);
+}
+
 export function fail(message) {
   console.error(`FAIL: ${message}`);
   process.exit(1);

@@ -11,7 +11,7 @@ import { readFileSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import {
   Checks, cameraArgument, framingDistance, intersectionOverUnion, kHeight, kWidth, launchBrowser, pngFromDataUrl,
-  runScan2lod, serve, settle, silhouette, tilesetSphere, viewFrom, watchPage, webModules,
+  runScan2lod, serve, settle, silhouette, stopwatch, tilesetSphere, viewFrom, watchPage, webModules,
 } from './support.mjs';
 
 const [scan2lod, dir, modules] = process.argv.slice(2);
@@ -25,8 +25,7 @@ const far = viewFrom(sphere, direction, 4 * framingDistance());
 const framed = viewFrom(sphere, direction, 0.9 * framingDistance());
 const near = viewFrom(sphere, direction, 1.1);
 
-const started = Date.now();
-const seconds = () => ((Date.now() - started) / 1000).toFixed(1);
+const seconds = stopwatch();
 
 // VTK's picture of the full-detail model from the framed view, beforehand.
 const vtkPng = path.join(dir, 'three_vtk.png');
