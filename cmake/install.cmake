@@ -15,6 +15,7 @@ foreach(header
     core/types.h core/array_view.h core/large_array.h core/progress.h core/error.h core/mesh_edges.h
     core/parallel_jobs.h
     io/atomic_file.h io/gltf_file.h
+    delivery/tileset.h delivery/tile_glb.h delivery/tile_tree.h
     lod/lod_model.h lod/model_file.h lod/mc_octree.h lod/lod_array.h lod/extract.h lod/transition.h
     lod/lod_cursor.h lod/cluster_hierarchy.h lod/cluster_cut.h lod/level_budget.h
     reconstruct/marching_cubes.h reconstruct/signed_distance.h reconstruct/cube_grid.h reconstruct/cube_table.h)

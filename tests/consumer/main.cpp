@@ -1,8 +1,10 @@
-// consumer MODEL.mco BUDGET OUT.glb: loads a model, takes the finest level
-// within BUDGET triangles from its default structure, writes it as glTF, and
-// prints "<structure> <triangles> <vertices>".
+// consumer MODEL.mco BUDGET OUT.glb TILES: loads a model, takes the finest
+// level within BUDGET triangles from its default structure, writes it as
+// glTF, writes the model's 3D Tiles tileset into the folder TILES, and prints
+// "<structure> <triangles> <vertices> <tiles>".
 #include <core/error.h>
 #include <core/progress.h>
+#include <delivery/tileset.h>
 #include <io/gltf_file.h>
 #include <lod/model_file.h>
 
@@ -10,8 +12,8 @@
 #include <cstdlib>
 
 int main(int argc, char** argv) {
-  if (argc != 4) {
-    std::fprintf(stderr, "usage: consumer MODEL.mco BUDGET OUT.glb\n");
+  if (argc != 5) {
+    std::fprintf(stderr, "usage: consumer MODEL.mco BUDGET OUT.glb TILES\n");
     return 2;
   }
   int reports = 0;
@@ -23,7 +25,9 @@ int main(int argc, char** argv) {
     const scan2lod::LevelCut& cut = extractor.extract(scan2lod::LevelRequest::at_triangles(std::atoll(argv[2])));
     const scan2lod::TriangleMesh mesh = scan2lod::compact_level(model, cut.triangles);
     scan2lod::write_gltf(argv[3], mesh);
-    std::printf("%s %zu %zu\n", scan2lod::structure_name(structure), mesh.triangles.size(), mesh.positions.size());
+    const scan2lod::TilesetReport tiles = scan2lod::write_tileset(model, argv[4]);
+    std::printf("%s %zu %zu %zu\n", scan2lod::structure_name(structure), mesh.triangles.size(), mesh.positions.size(),
+                tiles.tiles);
   } catch (const scan2lod::InputError& e) {
     std::fprintf(stderr, "consumer: %s\n", e.what());
     return 1;

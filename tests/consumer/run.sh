@@ -19,11 +19,12 @@ if ldd "$scratch/build/consumer" | grep -E -i "libpcl|libvtk|libOpen3D"; then
   exit 1
 fi
 "$scratch/prefix/bin/scan2lod" build "$source_dir/data/bunny/bun.conf" -o "$scratch/bunny.mco" -r 64 -q
-line="$("$scratch/build/consumer" "$scratch/bunny.mco" 1000 "$scratch/level.glb")"
+line="$("$scratch/build/consumer" "$scratch/bunny.mco" 1000 "$scratch/level.glb" "$scratch/tiles")"
 echo "consumer: $line"
-read -r structure triangles vertices <<<"$line"
+read -r structure triangles vertices tiles <<<"$line"
 [ "$structure" = clusters ] || { echo "expected the cluster hierarchy, got $structure" >&2; exit 1; }
 [ "$triangles" -gt 0 ] && [ "$triangles" -le 1000 ] || { echo "expected 1..1000 triangles, got $triangles" >&2; exit 1; }
 [ -s "$scratch/level.glb" ] || { echo "no glTF written" >&2; exit 1; }
+[ "$tiles" -gt 0 ] && [ -s "$scratch/tiles/tileset.json" ] || { echo "no tileset written ($tiles tiles)" >&2; exit 1; }
 rm -rf "$scratch"
 echo "consumer project built against the installed scan2lod and took a level of $triangles triangles"
