@@ -279,6 +279,7 @@ InputPoints load_shares(const std::vector<std::string>& inputs, const BuildOptio
   std::size_t first = 0;
   for (int r = 0; r < job.rank(); ++r) first += shares[std::size_t(r)].count;
   loaded.spool->join(census, first);
+  loaded.job_budget = budget;
   return loaded;
 }
 
@@ -434,13 +435,15 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
 }  // namespace
 
 void serve_build(const std::vector<std::string>& inputs, const BuildOptions& options) {
-  BrickOptions bricks;
-  bricks.work_dir = options.work_dir;
-  bricks.memory_bytes = options.memory_bytes > 0 ? options.memory_bytes : available_memory_bytes();
-  bricks.brick_cubes = options.brick_cubes;
-  bricks.sharing = options.sharing;
   AcquisitionReport report;
   InputPoints points = load_within_budget(inputs, options, &report);
+  BrickOptions bricks;
+  bricks.work_dir = options.work_dir;
+  bricks.memory_bytes = options.memory_bytes > 0 ? options.memory_bytes
+                        : points.job_budget > 0  ? points.job_budget
+                                                 : available_memory_bytes();
+  bricks.brick_cubes = options.brick_cubes;
+  bricks.sharing = options.sharing;
   // As build_model() decides on rank 0: one mesh given for its clusters alone is not reconstructed.
   const bool mesh_only = report.meshes == 1 && report.files.size() == 1 && options.clusters && !options.octree;
   if (points.spool && points.spool->shared() && !mesh_only) {
@@ -462,6 +465,9 @@ LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions&
   const auto start = Clock::now();
   BuildProgress progress(0.05, options.octree ? 4.0 : 0.0, options.clusters ? 1.6 : 0.0);
   InputPoints points = load_within_budget(inputs, options, &report.acquisition);
+  // Ranks that bin their shares plan with one budget: rank 0's, as measured when they met.
+  BuildOptions planned = options;
+  if (planned.memory_bytes <= 0 && points.job_budget > 0) planned.memory_bytes = points.job_budget;
   report.warnings = report.acquisition.warnings;
   report.mesh_input = report.acquisition.meshes == 1 && report.acquisition.files.size() == 1;
   TriangleMesh mesh;
@@ -472,7 +478,7 @@ LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions&
   std::string names;
   for (const std::string& input : inputs) names += (names.empty() ? "" : ", ") + input;
   LodModel model = build_from_points(points.spool ? nullptr : &points.points, points.spool.get(),
-                                     report.mesh_input && options.clusters ? &mesh : nullptr, options, &report, names,
+                                     report.mesh_input && options.clusters ? &mesh : nullptr, planned, &report, names,
                                      [&points] { points.release(); },
                                      &progress);
   report.acquisition = acquisition;

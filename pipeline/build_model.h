@@ -91,6 +91,9 @@ struct InputPoints {
   OrientedPoints points;              // in memory
   std::unique_ptr<PointSpool> spool;  // or on disk (closed)
   std::string made_folder;            // the work folder the spool made, removed with it when left empty
+  // When the spool is a share of a job's points: rank 0's budget, which
+  // every rank plans the bricks with (free memory differs between ranks).
+  double job_budget = 0;
   std::size_t size() const { return spool ? spool->job_census().count : points.size(); }
   void release() { points = OrientedPoints(), spool.reset(); }
   InputPoints() = default;
