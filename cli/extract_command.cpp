@@ -1,6 +1,7 @@
 // scan2lod extract: one mesh out of a .mco model, taken by reference from
 // either LOD structure (lod/lod_model.h): by percent, triangle budget,
 // object-space error, camera, or (octree) priority number.
+#include "cli/byte_size.h"
 #include "cli/commands.h"
 #include "cli/outputs.h"
 #include "cli/terminal.h"
@@ -11,12 +12,14 @@
 #include "lod/lod_model.h"
 #include "lod/percent_shortfall.h"
 #include "lod/model_file.h"
+#include "lod/paged_model.h"
 
 #include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -52,7 +55,7 @@ CameraView parse_camera(const std::string& text) {
 
 void add_extract_command(CLI::App& app) {
   struct Args {
-    std::string model, output, structure, camera;
+    std::string model, output, structure, camera, cache = "256M";
     double percent = 0, error = 0, fov = 45, pixel_error = 1;
     long long triangles = 0, priority = 0;
     int height = 1080;
@@ -87,11 +90,16 @@ void add_extract_command(CLI::App& app) {
       cmd->add_option("--height", args->height, "With --camera only: viewport height in pixels")->default_val(1080),
       cmd->add_option("--pixel-error", args->pixel_error, "With --camera only: largest error on screen, in pixels")
           ->default_val(1)};
+  cmd->add_option("--cache", args->cache,
+                  "Clusters: pages of the model held in memory at most (default 256M); a cut reads only the pages "
+                  "of the clusters it draws")
+      ->check([](const std::string& text) { return parse_bytes(text) > 0 ? "" : "expected a size such as 256M or 1G"; });
   CLI::Option* priority =
       cmd->add_option("--priority", args->priority, "Octree: the level after N expansions (0: the root's mesh)");
   cmd->add_flag("--json", args->json,
                 "Print {\"structure\", \"triangles\", \"vertices\", \"clusters\", \"priority\", \"error\", "
-                "\"select_seconds\", \"extract_seconds\"} as JSON, with \"warnings\" when there are any");
+                "\"select_seconds\", \"extract_seconds\"} as JSON, with \"warnings\" when there are any and "
+                "\"read\" {\"pages\", \"bytes\", \"file_bytes\"} when the cut was read page by page");
   cmd->callback([args, percent, triangles, error, camera, priority, camera_flags] {
     for (const CLI::Option* flag : camera_flags)
       if (flag->count() && !camera->count()) {
@@ -120,7 +128,12 @@ void add_extract_command(CLI::App& app) {
     check_mesh_output(args->output);
     refuse_overwriting_inputs(args->output, {args->model});
 
-    const LodModel model = load_model(args->model);
+    // Cluster cuts read only the pages they draw when the file has pages
+    // (format 4.6); the octree, and older files, are read whole.
+    const bool octree = args->structure == "octree" || (args->structure.empty() && priority->count());
+    std::optional<LodModel> paged;
+    if (!octree) paged = open_paged_model(args->model, std::uint64_t(parse_bytes(args->cache)));
+    const LodModel model = paged ? std::move(*paged) : load_model(args->model);
     check_mesh_output(args->output, model.origin, model_bounds(model));
     // A priority number is the octree's own: it picks the octree when no structure is named.
     const LodStructure structure = structure_named(
@@ -156,6 +169,12 @@ void add_extract_command(CLI::App& app) {
       j["percent"] = cut.percent;
       j["select_seconds"] = cut.select_seconds;
       j["extract_seconds"] = cut.extract_seconds + compact_seconds;
+      if (model.clusters && model.clusters->paged) {
+        const PageStats& read = model.clusters->paged->stats();
+        j["read"] = {{"pages", read.pages_read},
+                     {"bytes", read.head_bytes + read.page_bytes_read},
+                     {"file_bytes", std::filesystem::file_size(args->model)}};
+      }
       if (!warnings.kept().empty()) j["warnings"] = warnings.kept();
       std::printf("%s\n", j.dump(2).c_str());
     } else if (structure == LodStructure::kClusters) {
@@ -163,6 +182,11 @@ void add_extract_command(CLI::App& app) {
                   "extracted in %.2f ms -> %s\n",
                   cut.clusters, mesh.triangles.size(), cut.percent, mesh.positions.size(), cut.error,
                   cut.select_seconds * 1e3, (cut.extract_seconds + compact_seconds) * 1e3, args->output.c_str());
+      if (model.clusters->paged) {
+        const PageStats& read = model.clusters->paged->stats();
+        say("read %llu pages page by page: %.1f of the model's %.1f MB\n", (unsigned long long)read.pages_read,
+            double(read.head_bytes + read.page_bytes_read) / 1e6, double(std::filesystem::file_size(args->model)) / 1e6);
+      }
     } else {
       say("octree: priority %zu (%.1f %%), %zu triangles, %zu vertices, extracted in %.2f ms -> %s\n",
                   cut.priority, cut.percent, mesh.triangles.size(), mesh.positions.size(),

@@ -1,6 +1,7 @@
 // scan2lod view: the interactive VTK viewer on a .mco model, a mesh or a scan
 // set (visualize/viewer.h). --script drives it without a human: the same
 // slider moves and key presses, then it exits.
+#include "cli/byte_size.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
@@ -20,7 +21,7 @@ namespace scan2lod::cli {
 void add_view_command(CLI::App& app) {
   struct Args {
     std::vector<std::string> inputs;
-    std::string size = "1200x800", screenshot = "scan2lod_view.png", script, structure;
+    std::string size = "1200x800", screenshot = "scan2lod_view.png", script, structure, cache;
     double percent = 100, compare = 20;
     bool offscreen = false;
   };
@@ -33,6 +34,10 @@ void add_view_command(CLI::App& app) {
                   "First level shown (% of the LOD array for the octree, of the full-detail triangles for the "
                   "clusters)")
       ->capture_default_str();
+  cmd->add_option("--cache", args->cache,
+                  "A model with pages is read page by page, holding at most this much (e.g. 256M), starting on "
+                  "the camera cut; without it the model is read whole")
+      ->check([](const std::string& text) { return parse_bytes(text) > 0 ? "" : "expected a size such as 256M or 1G"; });
   cmd->add_option("--structure", args->structure,
                   "A model's LOD structure to show: clusters (keys c, f, l: camera cut, freeze, DAG levels) or "
                   "octree (key o: cells); default: clusters when the model has them")
@@ -75,7 +80,11 @@ void add_view_command(CLI::App& app) {
     options.compare_percent = args->compare;
     options.screenshot = args->screenshot;
     options.offscreen = args->offscreen || !args->script.empty();
-    ViewerInput input = load_viewer_input(args->inputs);  // file errors first, then the display
+    // File errors first, then the display.
+    const bool whole = args->cache.empty() || args->structure == "octree";
+    ViewerInput input = load_viewer_input(args->inputs, whole ? 0 : std::uint64_t(parse_bytes(args->cache)));
+    if (!args->cache.empty() && input.model && !input.paged && args->structure != "octree")
+      std::fprintf(stderr, "scan2lod: %s has no pages (written before format 4.6): read whole\n", input.source.c_str());
     if (input.model) options.structure = structure_named(*input.model, args->structure, input.source);
     else if (!args->structure.empty())
       throw InputError(input.source, "--structure applies to a .mco model, not to a mesh or a scan set");

@@ -13,11 +13,12 @@ install(TARGETS scan2lod_runtime EXPORT scan2lodTargets
 # The runtime's headers and the plain-data headers they include.
 foreach(header
     core/types.h core/array_view.h core/large_array.h core/progress.h core/error.h core/mesh_edges.h
-    core/parallel_jobs.h
+    core/parallel_jobs.h core/flat_hash.h
     io/atomic_file.h io/gltf_file.h
     delivery/tileset.h delivery/tile_glb.h delivery/tile_tree.h
     lod/lod_model.h lod/model_file.h lod/mc_octree.h lod/lod_array.h lod/extract.h lod/transition.h
-    lod/lod_cursor.h lod/cluster_hierarchy.h lod/cluster_cut.h lod/level_budget.h
+    lod/lod_cursor.h lod/cluster_hierarchy.h lod/cluster_cut.h lod/level_budget.h lod/page_geometry.h
+    lod/paged_model.h lod/paged_view.h
     reconstruct/marching_cubes.h reconstruct/signed_distance.h reconstruct/cube_grid.h reconstruct/cube_table.h)
   get_filename_component(folder ${header} DIRECTORY)
   install(FILES ${header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scan2lod/${folder})

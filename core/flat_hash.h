@@ -3,6 +3,7 @@
 // coordinates; std::unordered_map's node per entry costs more than the work.
 #pragma once
 
+#include <algorithm>
 #include <cassert>
 #include <cstdint>
 #include <vector>
@@ -64,6 +65,12 @@ class FlatHashMap {
     const std::size_t i = slot(key);
     __builtin_prefetch(keys_.data() + i);
     __builtin_prefetch(values_.data() + i);
+  }
+
+  // Empties the map, keeping its room.
+  void clear() {
+    std::fill(keys_.begin(), keys_.end(), kEmpty);
+    size_ = 0;
   }
 
   void reserve(std::size_t n) {

@@ -1,6 +1,7 @@
 #include "lod/cluster_cut.h"
 
 #include "lod/level_budget.h"
+#include "lod/paged_model.h"
 
 #include <algorithm>
 #include <stdexcept>
@@ -95,6 +96,7 @@ void emit_clusters(const ClusterHierarchy& h, const std::vector<std::int32_t>& s
   if (h.spool)
     throw std::logic_error("emit_clusters: the hierarchy's triangles are spooled on disk; save the model, or "
                            "load_spooled(), first");
+  if (h.paged) return h.paged->emit(h, selected, triangles);
   std::size_t total = triangles->size();
   for (std::int32_t c : selected) total += h.clusters[std::size_t(c)].triangle_count;
   triangles->reserve(total);

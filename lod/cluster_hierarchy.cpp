@@ -6,6 +6,7 @@
 #include "lod/cluster_partition.h"
 #include "lod/group_clustering.h"
 #include "lod/group_simplify.h"
+#include "lod/paged_model.h"
 #include "lod/triangle_spool.h"
 
 #include <meshoptimizer.h>
@@ -29,7 +30,9 @@ int ClusterHierarchy::levels() const {
   return clusters.empty() ? 0 : top + 1;
 }
 
-std::uint64_t ClusterHierarchy::stored_triangles() const { return spool ? spool->size() : triangles.size(); }
+std::uint64_t ClusterHierarchy::stored_triangles() const {
+  return spool ? spool->size() : paged ? paged->stored_triangles() : triangles.size();
+}
 
 void ClusterHierarchy::load_spooled() {
   if (!spool) return;

@@ -29,6 +29,8 @@
 namespace scan2lod {
 
 class TriangleSpool;
+class ClusterPages;
+class ClusterPages;
 
 // A bounding sphere and the object-space error of the simplification that
 // made a group (Hausdorff-like: the largest quadric distance of its
@@ -71,6 +73,9 @@ struct ClusterHierarchy {
   // clusters index the spool's triangles instead, on disk until the model
   // is written (lod/triangle_spool.h). load_spooled() brings them in.
   std::shared_ptr<TriangleSpool> spool;
+  // Set by open_paged_model: `triangles` is empty, and cuts read their
+  // triangles and vertices page by page from the file (lod/paged_model.h).
+  std::shared_ptr<ClusterPages> paged;
   // Left by the build: the vertices its collapses placed, indexed from the
   // count of positions it was given. add_cluster_hierarchy moves them into
   // the model's vertices; a model file does not hold them apart.

@@ -3,6 +3,7 @@
 #include "core/compact_mesh.h"
 #include "core/error.h"
 #include "lod/extract.h"
+#include "lod/paged_model.h"
 
 #include <algorithm>
 #include <chrono>
@@ -281,6 +282,7 @@ const LevelCut& LevelExtractor::extract(const LevelRequest& request) {
 }
 
 TriangleMesh compact_level(const LodModel& model, const std::vector<Triangle>& triangles) {
+  if (model.clusters && model.clusters->paged) return model.clusters->paged->compact(triangles);
   std::vector<Triangle> out = triangles;
   const VertexArray& v = model.vertices;
   TriangleMesh mesh = compact_mesh(v.positions, v.normals, v.colors, {&out});
@@ -288,7 +290,10 @@ TriangleMesh compact_level(const LodModel& model, const std::vector<Triangle>& t
   return mesh;
 }
 
-Aabb model_bounds(const LodModel& model) { return bounds(model.vertices.positions); }
+Aabb model_bounds(const LodModel& model) {
+  if (model.clusters && model.clusters->paged) return model.clusters->paged->bounds();
+  return bounds(model.vertices.positions);
+}
 
 OctreeSummary describe_octree(const LodModel& model) {
   require_structure(model, LodStructure::kOctree, "");

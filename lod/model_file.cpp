@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "lod/model_pack.h"
+#include "lod/page_geometry.h"
 #include "lod/triangle_spool.h"
 #include "lod/transition.h"
 #include "reconstruct/cube_table.h"
@@ -35,7 +36,8 @@ static_assert(sizeof(Vec3f) == 12 && sizeof(Triangle) == 12 && sizeof(Rgb) == 3 
                   sizeof(std::array<std::int32_t, kSubEdges>) == 4 * kSubEdges &&
                   sizeof(std::array<std::int32_t, 27>) == 108,
               "McOctree element types must be packed for the .mco layout");
-static_assert(sizeof(Cluster) == 16 && sizeof(GroupBound) == 20 && sizeof(ClusterPage) == 32,
+static_assert(sizeof(Cluster) == 16 && sizeof(GroupBound) == 20 && sizeof(ClusterPage) == 32 &&
+                  sizeof(PageExtent) == 48,
               "cluster records must be packed for the .mco layout");
 
 namespace {
@@ -88,6 +90,8 @@ struct Records {
   std::uint64_t pinned = 0;
   std::uint64_t cluster_info[3] = {0, 0, 0};
   PackedOctree packed;
+  std::vector<PageExtent> page_extents;  // 'PGIX'
+  std::uint64_t page_bytes = 0;          // 'PGEO''s length, streamed (never held whole)
 };
 
 // A section's payload in memory: element size, count and bytes, and for an
@@ -115,6 +119,9 @@ template <class T>
 Payload record(T* r, std::size_t bytes) {
   return {std::uint32_t(bytes), 1, static_cast<void*>(r)};
 }
+
+// A section written from a stream and never read into memory by load_model.
+Payload streamed(std::uint64_t bytes) { return {1, bytes, nullptr}; }
 
 // Which structure a section belongs to: the shared vertices are always
 // written, the octree's and the clusters' sections when the model has them.
@@ -187,6 +194,10 @@ const SectionSpec kSections[] = {
     {"CGRP", Part::kClusters, true, [](LodModel& m, Records&) { return array(m.clusters->groups); }, 3},
     // 4.4, optional: older readers read the clusters whole; this one derives the pages.
     {"PAGE", Part::kClusters, false, [](LodModel& m, Records&) { return array(m.clusters->pages); }, kPacked},
+    // 4.6, optional: older readers, and load_model, read the clusters whole;
+    // a paged reader (lod/paged_model.h) reads a page's geometry at a time.
+    {"PGIX", Part::kClusters, false, [](LodModel&, Records& r) { return array(r.page_extents); }, kPacked},
+    {"PGEO", Part::kClusters, false, [](LodModel&, Records& r) { return streamed(r.page_bytes); }, kPacked},
 };
 
 bool has_part(const LodModel& model, Part part) {
@@ -217,13 +228,18 @@ Records records_of(const LodModel& model, std::uint32_t major) {
 }
 
 // One section as the writer lays it out.
+using Emit = std::function<void(const std::uint8_t*, std::size_t)>;
+
 struct OutSection {
   std::uint32_t tag;
   std::uint32_t element_size;
   std::uint64_t count;
   const void* data;
   std::uint32_t flags = kRequired;
-  const TriangleSpool* spool = nullptr;  // the payload, when on disk
+  // The payload when it is not in memory (a spool, or pages encoded as they
+  // are written), with its checksum taken beforehand.
+  std::function<void(const Emit&)> stream;
+  std::uint64_t stream_checksum = 0;
 };
 
 // One directory entry as read.
@@ -248,6 +264,66 @@ std::uint64_t model_checksum(const void* data, std::size_t size, std::uint64_t s
 
 namespace {
 
+// Whether the pages lie in the order of 'CTRI', each one run, covering it:
+// what 'PGEO' is cut from as 'CTRI' streams past. (A hierarchy made by hand
+// may not; its file then has no 'PGEO', and a paged reader reads it whole.)
+bool pages_follow_triangles(const ClusterHierarchy& h) {
+  std::uint64_t next = 0, cluster = 0;
+  for (const ClusterPage& p : h.pages) {
+    if (p.first_cluster != cluster || p.cluster_count == 0 || p.cluster_count > h.clusters.size() - cluster)
+      return false;
+    for (; cluster < std::uint64_t(p.first_cluster) + p.cluster_count; ++cluster) {
+      const Cluster& c = h.clusters[cluster];
+      if (c.first_triangle != next) return false;
+      next += c.triangle_count;
+    }
+  }
+  return cluster == h.clusters.size() && next == h.stored_triangles();
+}
+
+// Calls visit(page, triangles, count) page by page, the triangles from
+// memory or streamed from the spool.
+void for_each_page(const ClusterHierarchy& h,
+                   const std::function<void(std::size_t, const Triangle*, std::size_t)>& visit) {
+  auto triangles_of = [&h](std::size_t page) {
+    const ClusterPage& p = h.pages[page];
+    const Cluster& first = h.clusters[p.first_cluster];
+    const Cluster& last = h.clusters[p.first_cluster + p.cluster_count - 1];
+    return std::size_t(last.first_triangle) + last.triangle_count - first.first_triangle;
+  };
+  if (!h.spool) {
+    for (std::size_t page = 0; page < h.pages.size(); ++page)
+      visit(page, h.triangles.data() + h.clusters[h.pages[page].first_cluster].first_triangle, triangles_of(page));
+    return;
+  }
+  std::vector<Triangle> pending;
+  std::size_t page = 0, partial = 0;  // bytes of a triangle split between runs
+  Triangle split;
+  h.spool->read([&](const std::uint8_t* bytes, std::size_t n) {
+    while (n > 0) {
+      if (partial || n < sizeof(Triangle)) {
+        const std::size_t take = std::min(n, sizeof(Triangle) - partial);
+        std::memcpy(reinterpret_cast<std::uint8_t*>(split.data()) + partial, bytes, take);
+        partial += take, bytes += take, n -= take;
+        if (partial == sizeof(Triangle)) pending.push_back(split), partial = 0;
+      } else {
+        const std::size_t whole = n / sizeof(Triangle);
+        const std::size_t at = pending.size();
+        pending.resize(at + whole);
+        std::memcpy(static_cast<void*>(pending.data() + at), bytes, whole * sizeof(Triangle));
+        bytes += whole * sizeof(Triangle), n -= whole * sizeof(Triangle);
+      }
+      std::size_t used = 0;
+      while (page < h.pages.size() && pending.size() - used >= triangles_of(page)) {
+        visit(page, pending.data() + used, triangles_of(page));
+        used += triangles_of(page);
+        ++page;
+      }
+      pending.erase(pending.begin(), pending.begin() + std::ptrdiff_t(used));
+    }
+  });
+}
+
 // The file's bytes in order, to `out` (called with runs of bytes), with the
 // trailer's checksum taken as they pass: a model is written without a copy
 // of it in memory.
@@ -256,6 +332,35 @@ void emit_model(const LodModel& model, std::uint32_t major,
   if (major < kUnpacked || major > kModelFormatMajor)
     throw std::invalid_argument("encode_model: format " + std::to_string(major) + " is not written");
   Records records = records_of(model, major);
+  // Pages of geometry: encoded once here for their sizes and checksums, and
+  // again as they are written, so that they are never held whole.
+  bool paged = model.clusters && major >= kPacked && !model.clusters->pages.empty() &&
+               pages_follow_triangles(*model.clusters);
+  PageEncoder encoder;
+  std::vector<std::uint8_t> blob;
+  std::uint64_t pages_checksum = 0;
+  if (paged) {
+    const ClusterHierarchy& h = *model.clusters;
+    std::unique_ptr<XXH64_state_t, XXH_errorcode (*)(XXH64_state_t*)> hash(XXH64_createState(), XXH64_freeState);
+    if (!hash) throw std::bad_alloc();
+    XXH64_reset(hash.get(), 0);
+    records.page_extents.resize(h.pages.size());
+    for_each_page(h, [&](std::size_t page, const Triangle* triangles, std::size_t count) {
+      Aabb box;
+      if (!paged || !encoder.encode(triangles, count, model.vertices, &blob, &box)) {
+        paged = false;
+        return;
+      }
+      PageExtent& e = records.page_extents[page];
+      e = {records.page_bytes, std::uint32_t(blob.size()), 0, model_checksum(blob.data(), blob.size()), {}, {}};
+      std::memcpy(&e.vertices, blob.data(), 4);
+      for (int k = 0; k < 3; ++k) e.min[k] = box.min[k], e.max[k] = box.max[k];
+      XXH64_update(hash.get(), blob.data(), blob.size());
+      records.page_bytes += blob.size();
+    });
+    pages_checksum = XXH64_digest(hash.get());
+    if (!paged) records.page_extents.clear(), records.page_bytes = 0;
+  }
   // The table's payloads are only read here.
   LodModel& readable = const_cast<LodModel&>(model);
   std::vector<OutSection> sections;
@@ -263,14 +368,28 @@ void emit_model(const LodModel& model, std::uint32_t major,
     if (!has_part(model, spec.part) || !spec.in(major)) continue;
     // A hierarchy made by hand, without pages: the reader derives them.
     if (std::strcmp(spec.tag, "PAGE") == 0 && model.clusters->pages.empty()) continue;
+    if ((std::strcmp(spec.tag, "PGIX") == 0 || std::strcmp(spec.tag, "PGEO") == 0) && !paged) continue;
     // A model in its inputs' own frame: files stay as they were.
     if (std::strcmp(spec.tag, "ORGN") == 0 && model.origin == Vec3d::Zero()) continue;
     const Payload p = spec.payload(readable, records);
-    sections.push_back({fourcc(spec.tag), p.element_size, p.count, p.data, spec.required ? kRequired : 0});
+    sections.push_back({fourcc(spec.tag), p.element_size, p.count, p.data, spec.required ? kRequired : 0, {}, 0});
+    OutSection& out = sections.back();
     // A hierarchy built in blocks may hold its triangles on disk.
-    if (sections.back().tag == fourcc("CTRI") && model.clusters->spool) {
-      sections.back().spool = model.clusters->spool.get();
-      sections.back().count = model.clusters->spool->size();
+    if (out.tag == fourcc("CTRI") && model.clusters->spool) {
+      const TriangleSpool* spool = model.clusters->spool.get();
+      out.count = spool->size();
+      out.stream = [spool](const Emit& emit) { spool->read(emit); };
+      out.stream_checksum = spool->checksum();
+    }
+    if (out.tag == fourcc("PGEO")) {
+      out.stream = [&](const Emit& emit) {
+        for_each_page(*model.clusters, [&](std::size_t, const Triangle* triangles, std::size_t count) {
+          Aabb box;
+          encoder.encode(triangles, count, model.vertices, &blob, &box);
+          emit(blob.data(), blob.size());
+        });
+      };
+      out.stream_checksum = pages_checksum;
     }
   }
   const std::size_t count = sections.size();
@@ -300,7 +419,7 @@ void emit_model(const LodModel& model, std::uint32_t major,
     put_u64(e + 16, s.count);
     put_u64(e + 24, offset);
     put_u64(e + 32, size);
-    put_u64(e + 40, s.spool ? s.spool->checksum() : model_checksum(s.data, size));
+    put_u64(e + 40, s.stream ? s.stream_checksum : model_checksum(s.data, size));
     offset = padded(offset + size);
   }
   put_u64(head.data() + directory_end - 8, model_checksum(head.data() + kHeaderBytes, kEntryBytes * count));
@@ -318,7 +437,7 @@ void emit_model(const LodModel& model, std::uint32_t major,
   offset = directory_end;
   for (const OutSection& s : sections) {
     const std::uint64_t size = s.element_size * s.count;
-    if (s.spool) s.spool->read(emit);
+    if (s.stream) s.stream(emit);
     else emit(static_cast<const std::uint8_t*>(s.data), size);
     emit(zeros, padded(offset + size) - (offset + size));
     offset = padded(offset + size);
@@ -409,8 +528,12 @@ class Decoder {
  public:
   Decoder(const std::uint8_t* data, std::size_t size, const std::string& source)
       : data_(data), size_(size), source_(source) {}
+  // Paged: reads from `fd` (a file of `size` bytes) only the header, the
+  // directory and the sections it decodes, checking each one's checksum.
+  Decoder(int fd, std::size_t size, const std::string& source) : data_(nullptr), size_(size), source_(source), fd_(fd) {}
 
   LodModel decode();
+  ModelPagesHead decode_pages_head();
 
  private:
   [[noreturn]] void fail(const std::string& what) const { throw InputError(source_, what); }
@@ -422,12 +545,15 @@ class Decoder {
   void index_sections();
   const Section& section(const char* tag) const;
   void read_part(Part part, LodModel* model);
-  void read_grid(McOctree* t) const;
+  void read_grid(McOctree* t);
   void read_pinned(LodArray* lod);
-  void read_origin(LodModel* model) const;
+  void read_origin(LodModel* model);
   void check_vertices(const LodModel& model) const;
   void decode_clusters(LodModel* model);
   void check_pages(ClusterHierarchy& h) const;
+  void check_page_extents(const ClusterHierarchy& h, const std::vector<PageExtent>& extents) const;
+  const std::uint8_t* payload(const Section& s);
+  void read_head();
   void check_octree_arrays(const McOctree& t) const;
   std::size_t check_nodes(const McOctree& t) const;
   void check_transitions(const McOctree& t, std::size_t internal) const;
@@ -436,6 +562,10 @@ class Decoder {
   const std::uint8_t* data_;
   std::size_t size_;
   const std::string& source_;
+  int fd_ = -1;                                  // paged: the file, read a section at a time
+  std::vector<std::uint8_t> head_;               // paged: the header and directory
+  std::vector<std::vector<std::uint8_t>> held_;  // paged: the sections read
+  std::uint64_t bytes_read_ = 0;                 // paged
   std::uint32_t major_ = 0, minor_ = 0;
   std::string format_;
   std::uint64_t file_length_ = 0, directory_end_ = 0;
@@ -504,6 +634,7 @@ void Decoder::verify_length_and_checksums() const {
   }
   if (size_ > file_length_)
     fail(bytes_text(size_ - file_length_) + " after the end of the model (" + bytes_text(file_length_) + ")");
+  if (fd_ >= 0) return;  // paged: each section is checked as it is read
   for (const Section& s : sections_)
     if (model_checksum(data_ + s.offset, s.length) != s.checksum)
       fail("checksum mismatch in section " + tag_name(s.tag) + " (damaged file)");
@@ -543,16 +674,18 @@ void Decoder::read_part(Part part, LodModel* model) {
     if (s.element_size != p.element_size)
       fail("section '" + std::string(spec.tag) + "' has elements of " + bytes_text(s.element_size) + ", expected " +
            std::to_string(p.element_size));
+    // Paged: the triangles stay in the file, read page by page from 'PGEO'.
+    if (fd_ >= 0 && s.tag == fourcc("CTRI")) continue;
     void* into = p.resize(p.vector, s.count);  // s.length bytes, inside the file: bounded by its size
-    if (s.length) std::memcpy(into, data_ + s.offset, s.length);
+    if (s.length) std::memcpy(into, payload(s), s.length);
   }
 }
 
-void Decoder::read_grid(McOctree* t) const {
+void Decoder::read_grid(McOctree* t) {
   const Section& s = section("GRID");
   if (s.count != 1 || s.element_size < kGridRecordBytes)
     fail("section 'GRID' must be one record of at least " + std::to_string(kGridRecordBytes) + " bytes");
-  const std::uint8_t* g = data_ + s.offset;
+  const std::uint8_t* g = payload(s);
   for (int i = 0; i < 3; ++i) std::memcpy(&t->grid.origin[i], g + 8 * i, 8);
   std::memcpy(&t->grid.cube_size, g + 24, 8);
   std::int32_t resolution, depth;
@@ -570,15 +703,16 @@ void Decoder::read_pinned(LodArray* lod) {
   if (s.element_size != 8)
     fail("section 'PINC' has elements of " + bytes_text(s.element_size) + ", expected 8");
   if (s.count != 1) fail("section 'PINC' must hold one count, not " + std::to_string(s.count));
-  lod->pinned = std::size_t(std::min<std::uint64_t>(get_u64(data_ + s.offset), std::numeric_limits<std::size_t>::max()));
+  lod->pinned = std::size_t(std::min<std::uint64_t>(get_u64(payload(s)), std::numeric_limits<std::size_t>::max()));
 }
 
 // Optional (added in 4.5): without it the vertices are in the inputs' frame.
-void Decoder::read_origin(LodModel* model) const {
+void Decoder::read_origin(LodModel* model) {
   if (!by_tag_.count(fourcc("ORGN"))) return;
   const Section& s = section("ORGN");
   if (s.count != 1 || s.element_size != 24) bad("section 'ORGN' must be one record of 24 bytes");
-  for (int i = 0; i < 3; ++i) std::memcpy(&model->origin[i], data_ + s.offset + 8 * i, 8);
+  const std::uint8_t* origin = payload(s);
+  for (int i = 0; i < 3; ++i) std::memcpy(&model->origin[i], origin + 8 * i, 8);
   if (!model->origin.allFinite()) bad("section 'ORGN': the origin must be a finite point");
 }
 
@@ -596,8 +730,8 @@ void Decoder::check_vertices(const LodModel& model) const {
 void Decoder::decode_clusters(LodModel* model) {
   const Section& info = section("CINF");
   if (info.count != 1 || info.element_size != 24) bad("section 'CINF' must be one record of 24 bytes");
-  const std::uint64_t full = get_u64(data_ + info.offset), first = get_u64(data_ + info.offset + 8),
-                      count = get_u64(data_ + info.offset + 16);
+  const std::uint8_t* record = payload(info);
+  const std::uint64_t full = get_u64(record), first = get_u64(record + 8), count = get_u64(record + 16);
   const std::size_t vertices = vertices_;
   if (first > vertices || count > vertices - first)
     bad("the cluster hierarchy's vertices " + std::to_string(first) + "+" + std::to_string(count) + " lie outside the " +
@@ -605,6 +739,7 @@ void Decoder::decode_clusters(LodModel* model) {
   model->clusters.emplace();
   read_part(Part::kClusters, model);
   ClusterHierarchy& h = *model->clusters;
+  const std::uint64_t stored = fd_ >= 0 ? section("CTRI").count : h.triangles.size();
   h.full_triangles = std::int64_t(std::min<std::uint64_t>(full, std::uint64_t(std::numeric_limits<std::int64_t>::max())));
   if (h.clusters.empty()) bad("the cluster hierarchy has no clusters");
   for (std::size_t i = 0; i < h.triangles.size(); ++i)
@@ -624,9 +759,9 @@ void Decoder::decode_clusters(LodModel* model) {
     const Cluster& cl = h.clusters[c];
     auto where = [c] { return "section 'CLUS': cluster " + std::to_string(c) + ": "; };
     if (cl.triangle_count == 0) bad(where() + "no triangles");
-    if (std::uint64_t(cl.first_triangle) + cl.triangle_count > h.triangles.size())
+    if (std::uint64_t(cl.first_triangle) + cl.triangle_count > stored)
       bad(where() + "triangles " + std::to_string(cl.first_triangle) + "+" + std::to_string(cl.triangle_count) +
-          " past the " + std::to_string(h.triangles.size()) + " of 'CTRI'");
+          " past the " + std::to_string(stored) + " of 'CTRI'");
     if (cl.own_group < -1 || cl.own_group >= groups || cl.parent_group < -1 || cl.parent_group >= groups)
       bad(where() + "group " + std::to_string(cl.own_group) + " or " + std::to_string(cl.parent_group) + " of " +
           std::to_string(groups));
@@ -873,6 +1008,88 @@ void Decoder::check_lod_array(const McOctree& t, const LodArray& lod, std::size_
           std::to_string(lod.inside_steps[k]) + ": expected ascending numbers below " + std::to_string(lod.order.size()));
 }
 
+// Paged: `n` bytes from `offset` of the file; false when the file is shorter.
+bool read_at(int fd, std::uint64_t offset, std::size_t n, std::uint8_t* into) {
+  while (n > 0) {
+    const ssize_t r = ::pread(fd, into, n, off_t(offset));
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return false;
+    into += r, offset += std::uint64_t(r), n -= std::size_t(r);
+  }
+  return true;
+}
+
+// A section's bytes: in the file's bytes, or (paged) read and checked now.
+const std::uint8_t* Decoder::payload(const Section& s) {
+  if (fd_ < 0) return data_ + s.offset;
+  held_.emplace_back(std::max<std::uint64_t>(s.length, 1));
+  if (!read_at(fd_, s.offset, s.length, held_.back().data()))
+    fail("cannot read section " + tag_name(s.tag) + ": " + std::strerror(errno ? errno : EIO));
+  bytes_read_ += s.length;
+  if (model_checksum(held_.back().data(), s.length) != s.checksum)
+    fail("checksum mismatch in section " + tag_name(s.tag) + " (damaged file)");
+  return held_.back().data();
+}
+
+// Paged: the header, then the directory it sizes.
+void Decoder::read_head() {
+  head_.resize(std::min<std::size_t>(size_, kHeaderBytes));
+  if (!read_at(fd_, 0, head_.size(), head_.data())) fail("cannot read the header");
+  data_ = head_.data();
+  read_header();
+  head_.resize(std::min<std::uint64_t>(size_, directory_end_));
+  if (!read_at(fd_, 0, head_.size(), head_.data())) fail("cannot read the section directory");
+  data_ = head_.data();
+  bytes_read_ += head_.size();
+}
+
+// 'PGIX' must lay the pages end to end over 'PGEO', each within what its
+// triangles can need, with a finite box.
+void Decoder::check_page_extents(const ClusterHierarchy& h, const std::vector<PageExtent>& extents) const {
+  if (extents.size() != h.pages.size())
+    bad("section 'PGIX' has " + std::to_string(extents.size()) + " pages, 'PAGE' " + std::to_string(h.pages.size()));
+  std::uint64_t next = 0;
+  for (std::size_t i = 0; i < extents.size(); ++i) {
+    const PageExtent& e = extents[i];
+    const std::string where = "section 'PGIX': page " + std::to_string(i) + ": ";
+    if (e.offset != next || e.bytes % 8 != 0)
+      bad(where + "its " + bytes_text(e.bytes) + " at " + std::to_string(e.offset) + " do not follow on from " +
+          std::to_string(next));
+    next += e.bytes;
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(e.min[k]) || !std::isfinite(e.max[k]) || e.min[k] > e.max[k])
+        bad(where + "needs a finite box");
+  }
+  if (next != section("PGEO").length)
+    bad("section 'PGIX': the pages hold " + bytes_text(next) + ", 'PGEO' " + bytes_text(section("PGEO").length));
+}
+
+ModelPagesHead Decoder::decode_pages_head() {
+  read_head();
+  read_directory();
+  verify_length_and_checksums();
+  index_sections();
+  ModelPagesHead head;
+  if (major_ < kPacked || !by_tag_.count(fourcc("CINF")) || !by_tag_.count(fourcc("PGIX")) ||
+      !by_tag_.count(fourcc("PGEO")) || !by_tag_.count(fourcc("PAGE")))
+    return head;
+  LodModel& model = head.model;
+  read_origin(&model);
+  vertices_ = section("POSN").count;
+  head.normals = section("NRML").count > 0;
+  head.colors = section("COLR").count > 0;
+  if (vertices_ > kMaxIndex) bad(std::to_string(vertices_) + " vertices, more than 32-bit indices address");
+  if ((head.normals && section("NRML").count != vertices_) || (head.colors && section("COLR").count != vertices_))
+    bad("normals or colours do not match the " + std::to_string(vertices_) + " vertices");
+  decode_clusters(&model);
+  check_page_extents(*model.clusters, records_.page_extents);
+  head.extents = std::move(records_.page_extents);
+  head.pages_offset = section("PGEO").offset;
+  head.vertices = vertices_;
+  head.bytes_read = bytes_read_;
+  return head;
+}
+
 LodModel Decoder::decode() {
   read_header();
   read_directory();
@@ -907,6 +1124,19 @@ LodModel Decoder::decode() {
 
 LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& source) {
   return Decoder(data, size, source).decode();
+}
+
+ModelPagesHead read_model_pages_head(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, "cannot read the model: no such file");
+  if (!fs::is_regular_file(path, ec)) throw InputError(path, "cannot read the model: not a regular file");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) throw InputError(path, "cannot read the model: " + ec.message());
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) throw InputError(path, std::string("cannot read the model: ") + std::strerror(errno));
+  const std::unique_ptr<int, void (*)(int*)> closing(new int(fd), [](int* f) { ::close(*f), delete f; });
+  return Decoder(fd, std::size_t(size), path).decode_pages_head();
 }
 
 }  // namespace scan2lod

@@ -99,6 +99,13 @@
 //   ORGN  1 record of 24 bytes: f64 origin[3], LodModel::origin, the point of
 //         the inputs' frame that the vertices are relative to (georeferenced
 //         inputs: input frame = origin + POSN, added in double)
+// Added in 4.6, optional, written when the hierarchy's pages lie in the order
+// of CTRI (a 4.5 reader, and load_model, skip them; a paged reader of an
+// older file reads it whole):
+//   PGIX  PageExtent records of 48 bytes, one a page (lod/page_geometry.h):
+//         where its geometry lies in PGEO, its checksum and box
+//   PGEO  bytes: each page's triangles over a vertex table of its own
+//         (lod/page_geometry.h), so that a viewer reads a page in one read
 // Every section is listed once, in kSections (model_file.cpp), with the
 // formats that hold it: the writer and the reader both walk that table. A new
 // array is a new row there (and, if it must agree with others, a check in the
@@ -108,6 +115,7 @@
 #pragma once
 
 #include "lod/lod_model.h"
+#include "lod/page_geometry.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -117,7 +125,7 @@
 namespace scan2lod {
 
 constexpr std::uint32_t kModelFormatMajor = 4;
-constexpr std::uint32_t kModelFormatMinor = 5;
+constexpr std::uint32_t kModelFormatMinor = 6;
 
 // Writes `model` to `path` (extension .mco) through write_atomically: a
 // failure or a signal leaves nothing under `path`.
@@ -141,6 +149,25 @@ LodModel load_model(const std::string& path);
 // but the current throws std::invalid_argument.
 std::vector<std::uint8_t> encode_model(const LodModel& model, std::uint32_t major = kModelFormatMajor);
 LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& source);
+
+// What reading a model page by page (lod/paged_model.h) starts from, read
+// without the vertices, the triangles or the octree: the origin, the cluster
+// hierarchy's clusters, groups and pages (its triangles left empty), and
+// where each page's geometry lies in the file.
+struct ModelPagesHead {
+  LodModel model;                   // no model.clusters: the file has no pages to read
+  std::vector<PageExtent> extents;  // one a page
+  std::uint64_t pages_offset = 0;   // where section 'PGEO' starts in the file
+  std::uint64_t vertices = 0;       // the model's shared vertices, which pages name
+  bool normals = false, colors = false;
+  std::uint64_t bytes_read = 0;     // to read this far
+};
+
+// Reads that much of `path`, checking what it reads as load_model does (the
+// sections' checksums, and that the hierarchy's arrays agree). Files with no
+// cluster hierarchy, or with no pages of geometry (written before format 4.6),
+// give no model.clusters. Throws InputError naming the file.
+ModelPagesHead read_model_pages_head(const std::string& path);
 
 // Throws InputError unless save_model could write `path`: extension .mco
 // (any case) in an existing folder. Commands call it before long work.

@@ -14,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -232,8 +233,16 @@ TEST(LodCli, BadInputsFailCleanlyAndWriteNothing) {
   fs::create_directories(dir);
   std::vector<char> bytes(fs::file_size(model));
   std::ifstream(model, std::ios::binary).read(bytes.data(), std::streamsize(bytes.size()));
+  // A flipped byte in the clusters' records, which every cut reads (a cut
+  // read page by page checks only what it reads).
   std::vector<char> damaged = bytes;
-  damaged[damaged.size() / 2] ^= 0x04;
+  std::uint32_t sections;
+  std::memcpy(&sections, bytes.data() + 16, 4);
+  std::uint64_t records = 0;
+  for (std::uint32_t i = 0; i < sections; ++i)
+    if (std::memcmp(bytes.data() + 40 + 48 * i, "CLUS", 4) == 0) std::memcpy(&records, bytes.data() + 40 + 48 * i + 24, 8);
+  ASSERT_GT(records, 0u);
+  damaged[records + 5] ^= 0x04;
   std::ofstream(dir / "damaged.mco", std::ios::binary).write(damaged.data(), std::streamsize(damaged.size()));
   std::ofstream(dir / "cut.mco", std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() / 3));
   std::ofstream(dir / "mesh.ply") << "ply\nformat ascii 1.0\nelement vertex 0\nend_header\n";

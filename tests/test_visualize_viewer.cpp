@@ -325,6 +325,58 @@ TEST(VisualizeViewer, ScriptDrivesTheCameraCut) {
   EXPECT_GT(covered_fraction(shot), 0.05);
 }
 
+// A model read page by page (view --cache): it starts on the camera cut,
+// holds no more page bytes than its cache while the camera orbits and
+// dollies, and each cut is the whole model's at the pixel error it took.
+TEST(VisualizeViewer, APagedModelIsViewedWithinItsCache) {
+  if (!have_display()) GTEST_SKIP() << "no X display";
+  const std::string path = bunny_model().string();
+  const scan2lod::LodModel whole = scan2lod::load_model(path);
+  scan2lod::LevelExtractor extractor(whole, scan2lod::LodStructure::kClusters);
+  const std::uint64_t cache = 1000000;
+  scan2lod::ViewerOptions options;
+  options.width = 640;
+  options.height = 480;
+  options.offscreen = true;
+  options.screenshot = (scratch() / "paged.png").string();
+  scan2lod::ViewerInput input = scan2lod::load_viewer_input({path}, cache);
+  ASSERT_TRUE(input.paged);
+  const scan2lod::CameraView framed = framed_view(*input.model, options.width, options.height);
+  scan2lod::Viewer viewer(std::move(input), options);
+  scan2lod::ViewerState s = viewer.state();
+  ASSERT_TRUE(s.paged);
+  EXPECT_TRUE(s.camera_cut);
+  EXPECT_EQ(s.page_budget, cache);
+  EXPECT_GE(s.cut_pixel_error, 1.0);
+  const auto whole_cut = [&](const scan2lod::CameraView& v, double pixel_error) {
+    return extractor.extract(scan2lod::LevelRequest::for_camera(v, pixel_error)).triangles.size();
+  };
+  EXPECT_EQ(s.triangles, whole_cut(framed, s.cut_pixel_error));
+  EXPECT_NE(s.overlay.find("pages held"), std::string::npos) << s.overlay;
+  int coarsened = 0;
+  for (int i = 0; i < 10; ++i) {
+    viewer.move_camera(36, i < 5 ? 0.8 : 1.25);  // in close, then back out
+    s = viewer.state();
+    EXPECT_LE(s.page_bytes, cache) << "move " << i;
+    EXPECT_GT(s.triangles, 0u);
+    coarsened += s.cut_pixel_error > 1.0;
+  }
+  EXPECT_LE(s.peak_page_bytes, cache);
+  EXPECT_GT(coarsened, 0) << "close views need more than 1 MB of pages";
+  // (Prefetching is PagedModel's test: this model's six pages in reach are all held.)
+  EXPECT_NE(scan2lod::describe(s).find(" prefetched "), std::string::npos);
+  type_key(viewer, 's');
+  EXPECT_GT(covered_fraction(options.screenshot), 0.05);
+  // The command line: --cache reads page by page and says so.
+  const fs::path script = scratch() / "paged.txt";
+  std::ofstream(script) << "zoom 0.5\norbit 90\n";
+  const CliRun r = scan2lod::testing::run_cli("view " + path + " --cache 1000K --size 500x400 --script " + script.string(), false);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("camera live"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("budget 1024000"), std::string::npos) << r.output;
+  EXPECT_NE(scan2lod::testing::run_cli("view " + path + " --cache none --script " + script.string()).status, 0);
+}
+
 TEST(VisualizeViewer, ScanSetsShowPointsAndNormals) {
   if (!have_display()) GTEST_SKIP() << "no X display";
   const fs::path script = scratch() / "scans.txt", shot = scratch() / "scans.png";

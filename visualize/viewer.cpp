@@ -6,6 +6,8 @@
 #include "core/mesh_edges.h"
 #include "io/mesh_file.h"
 #include "lod/model_file.h"
+#include "lod/paged_model.h"
+#include "lod/paged_view.h"
 #include "visualize/levels.h"
 #include "visualize/octree_cells.h"
 #include "visualize/png_output.h"
@@ -91,7 +93,7 @@ const char* draw_mode_name(DrawMode mode) {
   return "?";
 }
 
-ViewerInput load_viewer_input(const std::vector<std::string>& inputs) {
+ViewerInput load_viewer_input(const std::vector<std::string>& inputs, std::uint64_t cache_bytes) {
   if (inputs.empty()) throw InputError("", "view needs a model (.mco), a mesh or a scan set");
   ViewerInput in;
   for (const std::string& s : inputs) in.source += (in.source.empty() ? "" : " ") + s;
@@ -100,6 +102,13 @@ ViewerInput load_viewer_input(const std::vector<std::string>& inputs) {
   if (ext == ".mco") {
     if (inputs.size() > 1) throw InputError(inputs[1], "view takes one .mco model at a time");
     in.kind = ViewerInput::Kind::model;
+    if (cache_bytes > 0)
+      if (std::optional<LodModel> paged = open_paged_model(inputs[0], cache_bytes)) {
+        in.model.emplace();
+        std::swap(*in.model, *paged);
+        in.paged = true;
+        return in;
+      }
     in.model = load_model(inputs[0]);
     return in;
   }
@@ -154,6 +163,11 @@ std::string describe(const ViewerState& s) {
     out << " camera " << (s.camera_cut ? (s.frozen ? "frozen" : "live") : "off") << " pixel-error " << s.pixel_error
         << " selections " << s.camera_selections << " dag-colours " << (s.dag_colors ? "on" : "off");
   }
+  if (s.paged) {
+    out << " pages-held " << s.page_bytes << " peak " << s.peak_page_bytes << " budget " << s.page_budget
+        << " pages-read " << s.pages_read << " prefetched " << s.pages_prefetched << " cut-pixel-error "
+        << s.cut_pixel_error;
+  }
   return out.str();
 }
 
@@ -173,6 +187,7 @@ struct Viewer::Impl {
   ViewerOptions options;
   std::optional<LevelSource> source;          // the main view's levels
   std::optional<LevelSource> compare_source;  // the split view's (so the main cut's DAG levels stay)
+  std::optional<PagedView> paged_view;        // a model read page by page: its camera cuts
   ViewerState state;
   Aabb box;
 
@@ -206,6 +221,8 @@ struct Viewer::Impl {
   vtkNew<vtkCallbackCommand> main_render_started;
   CameraView last_view;        // the camera the camera cut was last chosen for
   bool have_view = false;
+  CameraView before_last_view;  // paged: the one before, to guess the next one from
+  bool have_before = false;
   Clock::time_point render_start;
 
   Impl(ViewerInput in, const ViewerOptions& o) : input(std::move(in)), options(o) {}
@@ -369,14 +386,21 @@ void Viewer::Impl::build() {
       state.has_levels = true;
       state.structure = structure;
       state.levels = source->levels();
-      // Every level's vertices, once: points, normals and colours for VTK.
-      TriangleMesh vertices;
-      vertices.positions.assign(model.vertices.positions.begin(), model.vertices.positions.end());
-      vertices.normals.assign(model.vertices.normals.begin(), model.vertices.normals.end());
-      vertices.colors.assign(model.vertices.colors.begin(), model.vertices.colors.end());
-      level_poly = mesh_to_poly_data(vertices);
-      vertex_used.assign(vertices.positions.size(), 0);
-      mesh_mapper->SetInputData(level_poly);
+      if (input.paged) {
+        // Read page by page: each cut brings its own vertices (show_cut).
+        paged_view.emplace(model);
+        state.paged = true;
+        state.page_budget = model.clusters->paged->budget();
+      } else {
+        // Every level's vertices, once: points, normals and colours for VTK.
+        TriangleMesh vertices;
+        vertices.positions.assign(model.vertices.positions.begin(), model.vertices.positions.end());
+        vertices.normals.assign(model.vertices.normals.begin(), model.vertices.normals.end());
+        vertices.colors.assign(model.vertices.colors.begin(), model.vertices.colors.end());
+        level_poly = mesh_to_poly_data(vertices);
+        vertex_used.assign(vertices.positions.size(), 0);
+        mesh_mapper->SetInputData(level_poly);
+      }
       box = model_bounds(model);
       const int top = std::max(state.levels - 1, 1);
       level_colors->SetNumberOfTableValues(top + 1);
@@ -461,11 +485,14 @@ void Viewer::Impl::build() {
       set_slider_unit(false);
       rep->SetValue(std::clamp(options.percent, 0.0, 100.0));
       slider->EnabledOn();
-      show_level(LevelRequest::at_percent(std::clamp(options.percent, 0.0, 100.0)));
+      // Paged, the first view is the camera's: the full detail of a model
+      // read page by page may be far larger than the budget.
+      if (!input.paged) show_level(LevelRequest::at_percent(std::clamp(options.percent, 0.0, 100.0)));
       state.compare_percent = std::clamp(options.compare_percent, 0.0, 100.0);
     }
   }
   reset_camera();
+  if (input.paged) set_camera_cut(true);
   update_overlay();
 }
 
@@ -509,7 +536,8 @@ void Viewer::Impl::on_slider() {
 
 void Viewer::Impl::show_level(const LevelRequest& request) {
   const bool uniform = request.kind != LevelRequest::Kind::kCamera;
-  const LevelCut& cut = source->cut(request);
+  const LevelCut& cut = paged_view && !uniform ? paged_view->view(request.camera) : source->cut(request);
+  if (paged_view && !uniform) state.cut_pixel_error = paged_view->pixel_error();
   // The same level again (a slider move inside one step): nothing to send.
   const bool same = uniform && shown_uniform && state.triangles == cut.triangles.size() && state.triangles != 0 &&
                     (state.structure == LodStructure::kOctree
@@ -525,10 +553,20 @@ void Viewer::Impl::show_cut(const LevelCut& cut) {
   // went to VTK (and the GPU) once.
   const std::vector<Triangle>& triangles = cut.triangles;
   const auto start = Clock::now();
-  set_triangles(level_poly, triangles);
+  // Paged, the cut's vertices come with it (compact_level from its pages).
+  TriangleMesh paged_mesh;
+  if (paged_view) {
+    paged_mesh = compact_level(*input.model, triangles);
+    level_poly = mesh_to_poly_data(paged_mesh);
+    mesh_mapper->SetInputData(level_poly);
+  } else {
+    set_triangles(level_poly, triangles);
+  }
   if (state.structure == LodStructure::kClusters) {
     // Each triangle's DAG level as cell data, always in step with the cells.
-    std::vector<std::uint8_t> levels = source->triangle_levels();
+    std::vector<std::uint8_t> levels = paged_view && state.camera_cut && !shown_uniform
+                                           ? paged_view->extractor().triangle_levels()
+                                           : source->triangle_levels();
     levels.resize(triangles.size(), 0);
     auto array = vtkSmartPointer<vtkUnsignedCharArray>::New();
     array->SetName("DagLevel");
@@ -537,20 +575,22 @@ void Viewer::Impl::show_cut(const LevelCut& cut) {
     level_poly->GetCellData()->AddArray(array);
   }
   // Vertices the level uses, as compact_level would keep them.
-  std::size_t used = 0;
-  for (const Triangle& t : triangles)
-    for (std::int32_t v : t)
-      if (!vertex_used[std::size_t(v)]) vertex_used[std::size_t(v)] = 1, ++used;
-  for (const Triangle& t : triangles)
-    for (std::int32_t v : t) vertex_used[std::size_t(v)] = 0;
+  std::size_t used = paged_mesh.positions.size();
+  if (!paged_view) {
+    for (const Triangle& t : triangles)
+      for (std::int32_t v : t)
+        if (!vertex_used[std::size_t(v)]) vertex_used[std::size_t(v)] = 1, ++used;
+    for (const Triangle& t : triangles)
+      for (std::int32_t v : t) vertex_used[std::size_t(v)] = 0;
+  }
   level_vertices = used;
   // How long edges are on screen (a sample of them is enough): dense
   // wireframes are drawn lit and grey instead of black (style_wireframe).
   const std::size_t stride = std::max<std::size_t>(1, triangles.size() / 4096);
   const double diagonal = box.diagonal();
-  edge_pixels = diagonal > 0 ? mean_edge_length(input.model->vertices.positions, triangles, stride) / diagonal *
-                                   options.height
-                             : 8;
+  const double mean_edge = paged_view ? mean_edge_length(paged_mesh.positions, paged_mesh.triangles, stride)
+                                     : mean_edge_length(input.model->vertices.positions, triangles, stride);
+  edge_pixels = diagonal > 0 ? mean_edge / diagonal * options.height : 8;
   if (state.mode == DrawMode::wireframe) apply_mode();
   state.convert_ms = ms_since(start);
   state.extract_ms = cut.extract_seconds * 1e3;
@@ -579,10 +619,19 @@ CameraView Viewer::Impl::camera_view() const {
 }
 
 void Viewer::Impl::select_for_camera(const CameraView& view) {
+  before_last_view = last_view;
+  have_before = have_view;
   last_view = view;
   have_view = true;
   show_level(LevelRequest::for_camera(view, state.pixel_error));
   ++state.camera_selections;
+  if (paged_view && have_before) {
+    // The camera keeps moving as it moved: read what that view will need.
+    CameraView next = view;
+    next.eye = view.eye + (view.eye - before_last_view.eye);
+    next.target = view.target + (view.target - before_last_view.target);
+    if ((next.eye - next.target).norm() > 0) state.pages_prefetched += paged_view->prefetch(next);
+  }
   update_overlay();
 }
 
@@ -665,6 +714,12 @@ void Viewer::Impl::update_overlay() {
     state.triangles = poly ? std::size_t(poly->GetNumberOfPolys()) : 0;
     state.vertices = state.has_levels ? level_vertices : poly ? std::size_t(poly->GetNumberOfPoints()) : 0;
   }
+  if (paged_view) {
+    const PageStats& read = paged_view->pages().stats();
+    state.page_bytes = read.resident_bytes;
+    state.peak_page_bytes = read.peak_resident_bytes;
+    state.pages_read = read.pages_read;
+  }
   std::ostringstream text;
   char line[256];
   if (input.kind == ViewerInput::Kind::scans) {
@@ -697,6 +752,13 @@ void Viewer::Impl::update_overlay() {
       else
         text << "\nuniform cut (c: camera cut)";
       if (state.dag_colors) text << "\ncolour: DAG level (" << state.levels << " levels, red finest, blue coarsest)";
+    }
+    if (state.paged) {
+      std::snprintf(line, sizeof line, "\npages held %.1f of %.0f MiB, %s read", double(state.page_bytes) / 1048576,
+                    double(state.page_budget) / 1048576, thousands(state.pages_read).c_str());
+      text << line;
+      if (state.camera_cut && state.cut_pixel_error > state.pixel_error)
+        text << "; cut at " << state.cut_pixel_error << " px to fit";
     }
   }
   state.overlay = text.str();

@@ -37,6 +37,7 @@ struct ViewerInput {
   enum class Kind { model, mesh, scans } kind = Kind::mesh;
   std::string source;                // the file(s), for the window title and messages
   std::optional<LodModel> model;     // Kind::model
+  bool paged = false;                // the model is read page by page (open_paged_model)
   TriangleMesh mesh;                 // Kind::mesh
   std::vector<OrientedPoints> scans; // Kind::scans: one per range image, common frame
   std::vector<std::string> scan_names;
@@ -45,7 +46,10 @@ struct ViewerInput {
 // Reads a .mco model, a mesh (.ply with faces, .obj, .off, .stl, .vtp), or a
 // scan set (a .conf, range-grid .ply files, organized .pcd files; several
 // files are one set). Throws InputError naming the file and what was expected.
-ViewerInput load_viewer_input(const std::vector<std::string>& inputs);
+// With `cache_bytes`, a model with pages (format 4.6) is opened page by page
+// (lod/paged_model.h): the viewer then holds at most that many bytes of pages
+// and starts on the camera cut.
+ViewerInput load_viewer_input(const std::vector<std::string>& inputs, std::uint64_t cache_bytes = 0);
 
 struct ViewerOptions {
   int width = 1200, height = 800;  // window pixels
@@ -94,6 +98,12 @@ struct ViewerState {
   bool normals = false;         // scan sets: normal glyphs shown
   std::string overlay;          // the text in the window's corner
   std::string last_screenshot;  // path of the last picture saved
+  // A model read page by page: the budget, the page bytes held now and at
+  // most, pages read and prefetched so far, and the pixel error the last
+  // camera cut took to fit the budget (>= pixel_error).
+  bool paged = false;
+  std::uint64_t page_budget = 0, page_bytes = 0, peak_page_bytes = 0, pages_read = 0, pages_prefetched = 0;
+  double cut_pixel_error = 0;
 };
 
 class Viewer {
