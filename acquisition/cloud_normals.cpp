@@ -2,7 +2,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
-#include "reconstruct/signed_distance.h"
+#include "spatial/point_index.h"
 
 #include <open3d/geometry/KDTreeSearchParam.h>
 #include <open3d/geometry/PointCloud.h>

@@ -4,13 +4,14 @@
 #include "acquisition/las_file.h"
 #include "acquisition/mesh_points.h"
 #include "acquisition/organized_pcd.h"
-#include "acquisition/ply_header.h"
 #include "acquisition/point_cloud_files.h"
 #include "acquisition/range_grid_ply.h"
 #include "core/error.h"
 #include "core/parallel_jobs.h"
 #include "core/progress.h"
+#include "io/file_extension.h"
 #include "io/mesh_file.h"
+#include "io/ply_header.h"
 
 #include <omp.h>
 
@@ -24,15 +25,11 @@ namespace {
 
 enum class Kind { conf, range_grid, pcd, cloud, mesh };
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
-
 enum class PlyKind { range_grid, mesh, cloud };
 
 // A PLY with a range grid is a scan, one with faces a mesh, one with neither a point cloud.
+// By line prefixes rather than io/ply_header.h: this rule picks the reader, and a
+// header spaced oddly must keep going to the reader it went to.
 PlyKind ply_kind(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string line;

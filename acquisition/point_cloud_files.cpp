@@ -1,9 +1,9 @@
 #include "acquisition/point_cloud_files.h"
 
-#include "acquisition/ply_header.h"
 #include "acquisition/text_records.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/ply_header.h"
 
 #include <algorithm>
 #include <charconv>

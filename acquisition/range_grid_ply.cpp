@@ -1,9 +1,9 @@
 #include "acquisition/range_grid_ply.h"
 
-#include "acquisition/ply_header.h"
 #include "acquisition/text_records.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/ply_header.h"
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/ply_io.h>
@@ -56,7 +56,7 @@ PlyLayout read_layout(const std::string& path, std::ifstream& in) {
   L.format = h.format;
   L.header_bytes = h.bytes;
   L.warning = ignored_lines_warning(path, h);
-  L.header_lines = h.lines;
+  L.header_lines = h.lines.size();
   for (const PlyHeaderLine& info : h.obj_info) {
     std::istringstream ls(info.text);
     std::string name;

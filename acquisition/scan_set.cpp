@@ -4,8 +4,8 @@
 #include "acquisition/range_grid_ply.h"
 #include "core/error.h"
 #include "core/parallel_jobs.h"
+#include "io/file_extension.h"
 
-#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
@@ -14,7 +14,6 @@
 namespace scan2lod {
 
 std::vector<PlacedScan> read_scan_set(const std::vector<std::string>& inputs, int threads) {
-  namespace fs = std::filesystem;
   struct Job {
     std::string file;
     ScanPose pose;
@@ -22,8 +21,7 @@ std::vector<PlacedScan> read_scan_set(const std::vector<std::string>& inputs, in
   };
   std::vector<Job> jobs;
   for (const std::string& input : inputs) {
-    std::string ext = fs::path(input).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    const std::string ext = lower_extension(input);
     if (ext == ".conf") {
       for (ConfEntry& e : read_conf(input)) jobs.push_back({e.file, e.pose, false});
     } else if (ext == ".ply" || ext == ".pcd") {

@@ -1,8 +1,8 @@
 #include "cli/outputs.h"
 
 #include "core/error.h"
+#include "io/file_extension.h"
 
-#include <algorithm>
 #include <filesystem>
 
 namespace scan2lod::cli {
@@ -20,10 +20,8 @@ void refuse_overwriting_inputs(const std::string& output, const std::vector<std:
 }
 
 std::string extension_of(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  if (!ext.empty()) ext.erase(0, 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
+  const std::string ext = lower_extension(path);
+  return ext.empty() ? ext : ext.substr(1);
 }
 
 }  // namespace scan2lod::cli

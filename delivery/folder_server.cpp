@@ -1,6 +1,7 @@
 #include "delivery/folder_server.h"
 
 #include "core/error.h"
+#include "io/file_extension.h"
 
 #include <httplib.h>
 
@@ -48,12 +49,6 @@ std::string bind_failure(const std::string& host, int port) {
                                    " is in use (give another with --port, or --port 0 for any free one)";
   if (reason == EACCES) return "cannot listen on " + where + ": ports below 1024 need administrator rights";
   return "cannot listen on " + where + (reason ? std::string(": ") + std::strerror(reason) : std::string());
-}
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
 }
 
 // Streams the file at `path` as the response, in pieces. A response given

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "io/line_writer.h"
+#include "io/ply_header.h"
 
 #include <algorithm>
 #include <charconv>
@@ -9,8 +10,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <memory>
-#include <sstream>
 
 namespace scan2lod {
 namespace {
@@ -26,63 +27,13 @@ File create(const std::string& file, const std::string& name) {
 }
 
 // ---------------------------------------------------------------------------
-// Reading a PLY's positions: its header, as far as the vertices need it.
-
-struct PlyProperty {
-  std::string type, name;
-  bool list = false;
-};
-struct PlyElement {
-  std::string name;
-  std::size_t count = 0;
-  std::vector<PlyProperty> properties;
-};
-struct PlyLayout {
-  std::string format;
-  std::streamoff body = 0;  // where the header ends
-  std::vector<PlyElement> elements;
-};
-
-PlyLayout ply_layout(const std::string& path, std::ifstream& in) {
-  PlyLayout layout;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream words(line);
-    std::string key;
-    words >> key;
-    if (key == "format") {
-      words >> layout.format;
-    } else if (key == "element") {
-      PlyElement e;
-      words >> e.name >> e.count;
-      layout.elements.push_back(e);
-    } else if (key == "property" && !layout.elements.empty()) {
-      PlyProperty p;
-      words >> p.type;
-      p.list = p.type == "list";
-      if (p.list) words >> p.type >> p.type;  // the count's type, then the items'
-      words >> p.name;
-      layout.elements.back().properties.push_back(p);
-    } else if (key == "end_header") {
-      layout.body = in.tellg();
-      return layout;
-    }
-  }
-  throw InputError(path, "PLY header has no end_header line");
-}
-
-int ply_size(const std::string& t) {
-  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
-  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-  if (t == "double" || t == "float64") return 8;
-  return 4;
-}
+// Reading a PLY's positions, by the layout its header (io/ply_header.h) gives.
 
 // One binary value of PLY type `t` at `p`, as a double.
 double binary_value(const char* p, const std::string& t, bool swap) {
   char b[8];
-  const int n = ply_size(t);
-  std::memcpy(b, p, std::size_t(n));
+  const std::size_t n = ply_scalar_size(t);
+  std::memcpy(b, p, n);
   if (swap) std::reverse(b, b + n);
   auto as = [&](auto v) {
     std::memcpy(&v, b, sizeof v);
@@ -98,20 +49,20 @@ double binary_value(const char* p, const std::string& t, bool swap) {
   return as(float());
 }
 
-std::vector<Vec3d> binary_positions(const std::string& path, std::ifstream& in, const PlyLayout& layout,
+std::vector<Vec3d> binary_positions(const std::string& path, std::ifstream& in, const PlyHeader& layout,
                                     std::size_t vertex, const int (&xyz)[3]) {
   std::uint64_t skip = 0;
   for (std::size_t e = 0; e < vertex; ++e) {
     std::uint64_t record = 0;
-    for (const PlyProperty& p : layout.elements[e].properties) record += std::uint64_t(ply_size(p.type));
+    for (const PlyProperty& p : layout.elements[e].properties) record += std::uint64_t(ply_scalar_size(p.type));
     skip += record * layout.elements[e].count;
   }
   const PlyElement& v = layout.elements[vertex];
   std::vector<std::size_t> offset(v.properties.size() + 1, 0);
-  for (std::size_t i = 0; i < v.properties.size(); ++i) offset[i + 1] = offset[i] + std::size_t(ply_size(v.properties[i].type));
+  for (std::size_t i = 0; i < v.properties.size(); ++i) offset[i + 1] = offset[i] + ply_scalar_size(v.properties[i].type);
   const std::size_t record = offset.back();
-  const bool swap = layout.format == "binary_big_endian";
-  in.seekg(layout.body + std::streamoff(skip));
+  const bool swap = layout.format == PlyHeader::Format::binary_be;
+  in.seekg(std::streamoff(layout.bytes + skip));
   std::vector<Vec3d> positions(v.count);
   std::vector<char> block(record * 65536);
   for (std::size_t first = 0; first < v.count; first += 65536) {
@@ -128,9 +79,9 @@ std::vector<Vec3d> binary_positions(const std::string& path, std::ifstream& in, 
   return positions;
 }
 
-std::vector<Vec3d> ascii_positions(const std::string& path, std::ifstream& in, const PlyLayout& layout,
+std::vector<Vec3d> ascii_positions(const std::string& path, std::ifstream& in, const PlyHeader& layout,
                                    std::size_t vertex, const int (&xyz)[3]) {
-  in.seekg(layout.body);
+  in.seekg(std::streamoff(layout.bytes));
   std::string word;
   for (std::size_t e = 0; e < vertex; ++e)
     for (std::size_t i = 0; i < layout.elements[e].count * layout.elements[e].properties.size(); ++i) in >> word;
@@ -223,7 +174,9 @@ void write_off_in_frame(const std::string& file, const std::string& name, const 
 std::vector<Vec3d> read_ply_double_positions(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open the file for reading");
-  const PlyLayout layout = ply_layout(path, in);
+  // No limit on its lines: read_mesh's checks found its end_header.
+  const PlyHeader layout = parse_ply_header(in, std::numeric_limits<std::size_t>::max());
+  if (!layout.ended) throw InputError(path, "PLY header has no end_header line");
   std::size_t vertex = 0;
   while (vertex < layout.elements.size() && layout.elements[vertex].name != "vertex") ++vertex;
   if (vertex == layout.elements.size()) throw InputError(path, "PLY has no element vertex");
@@ -234,17 +187,17 @@ std::vector<Vec3d> read_ply_double_positions(const std::string& path) {
     for (int k = 0; k < 3; ++k)
       if (properties[p].name == std::string(1, char('x' + k))) {
         xyz[k] = int(p);
-        wide |= ply_size(properties[p].type) == 8;
+        wide |= ply_scalar_size(properties[p].type) == 8;
       }
   if (!wide) return {};
   if (std::min({xyz[0], xyz[1], xyz[2]}) < 0) throw InputError(path, "PLY element vertex needs properties x, y and z");
   for (std::size_t e = 0; e <= vertex; ++e)
     for (const PlyProperty& p : layout.elements[e].properties)
-      if (p.list)
+      if (p.type == "list")
         throw InputError(path, "PLY element " + layout.elements[e].name + " has a list property '" + p.name +
                                    "'; only face vertex_indices may be a list");
-  return layout.format == "ascii" ? ascii_positions(path, in, layout, vertex, xyz)
-                                  : binary_positions(path, in, layout, vertex, xyz);
+  return layout.format == PlyHeader::Format::ascii ? ascii_positions(path, in, layout, vertex, xyz)
+                                                   : binary_positions(path, in, layout, vertex, xyz);
 }
 
 std::vector<Vec3d> read_off_double_positions(const std::string& path, std::size_t vertices) {

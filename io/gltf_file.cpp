@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/file_extension.h"
 #include "io/used_vertices.h"
 
 // Debian's libtinygltf is built with nlohmann_json; no images are written,
@@ -14,7 +15,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <optional>
 
@@ -31,14 +31,6 @@ PositionGrid position_grid(const Aabb& box) {
 }
 
 namespace {
-
-namespace fs = std::filesystem;
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
-}
 
 // The one binary buffer every view points into; views start 4-byte aligned,
 // as vertex attributes require.

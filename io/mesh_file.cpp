@@ -3,10 +3,12 @@
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "io/double_positions.h"
+#include "io/file_extension.h"
 #include "io/gltf_file.h"
 #include "io/gltf_read.h"
 #include "io/local_origin.h"
 #include "io/obj_writer.h"
+#include "io/ply_header.h"
 #include "io/used_vertices.h"
 #include "io/vtp_file.h"
 
@@ -24,7 +26,6 @@
 
 #include <algorithm>
 #include <charconv>
-#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -50,13 +51,6 @@ static_assert(sizeof(Vec3f) == 3 * sizeof(float), "Vec3f must be packed for bulk
 std::mutex& openmesh_io_mutex() {
   static std::mutex m;
   return m;
-}
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
 }
 
 std::uintmax_t file_size_or_zero(const std::string& path) {
@@ -218,174 +212,139 @@ struct ExpectedCounts {
   std::size_t vertices = 0, faces = 0;
 };
 
-// Scalar byte size of a PLY type name, 0 if unknown.
-int ply_type_size(const std::string& t) {
-  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
-  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-  if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" ||
-      t == "float32")
-    return 4;
-  if (t == "double" || t == "float64") return 8;
-  return 0;
+// A header that runs longer is taken for one without end_header.
+constexpr std::size_t kOpenMeshHeaderLines = 99999;
+
+// A header line as messages show it: without trailing '\r' and blanks.
+std::string trimmed(std::string line) {
+  while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+  return line;
 }
 
-// Parses the PLY header so that everything OpenMesh's reader would
-// misinterpret (range grids, lists it skips wrongly, counts the body cannot
-// hold) is reported up front with a precise message.
+// OpenMesh reads the header as a stream of words, not lines: its format is
+// the 2nd to 4th word, and a keyword anywhere (say after the version or in
+// an obj_info line) starts a new entry, e.g. a property before any element,
+// which it appends to an element that does not exist (a crash). So every
+// line must have exactly the words its keyword takes. `element_seen`: an
+// element line came before.
+void check_openmesh_words(const std::string& path, const PlyHeaderLine& header_line, bool* element_seen) {
+  const std::string line = trimmed(header_line.text);
+  const std::vector<std::string>& words = header_line.words;
+  const std::string key = words.empty() ? std::string() : words[0];
+  const std::size_t n = header_line.number;
+  const std::string where = "PLY header line " + std::to_string(n);
+  const std::size_t word_count = words.size();
+  bool has_keyword = false;
+  for (std::size_t i = 1; i < word_count; ++i)
+    has_keyword |= words[i] == "format" || words[i] == "element" || words[i] == "property" ||
+                   words[i] == "end_header" || words[i] == "comment";
+  auto expect_words = [&](std::size_t count, const char* form) {
+    if (word_count != count)
+      throw InputError(path, where + ": expected '" + form + "', got '" + line + "'");
+  };
+  if ((n == 2) != (key == "format"))
+    throw InputError(path, where + ": expected the format line right after 'ply', and only there");
+  if (key == "obj_info" && has_keyword)
+    throw InputError(path, where + ": obj_info holds a PLY keyword, which OpenMesh would read as one");
+  if (key == "format") {
+    expect_words(3, "format FORMAT 1.0");
+    const std::string& format = words[1];
+    const std::string& version = words[2];
+    char* end = nullptr;
+    std::strtod(version.c_str(), &end);
+    if (end != version.c_str() + version.size())
+      throw InputError(path, where + ": version '" + version + "' is not a number");
+    if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
+      throw InputError(path, where + ": unknown format '" + format +
+                                 "', expected ascii, binary_little_endian or binary_big_endian");
+  } else if (key == "element") {
+    expect_words(3, "element NAME COUNT");
+    long long count = -1;
+    if (!read_ply_count(words[2], &count) || count < 0 || count > 0x7fffffffLL)
+      throw InputError(path, where + ": expected 'element NAME COUNT' with 0 <= COUNT < 2^31");
+    *element_seen = true;
+  } else if (key == "property") {
+    if (!*element_seen) throw InputError(path, where + ": property before any element");
+    const std::string type = word_count > 1 ? words[1] : std::string();
+    if (type == "list") {
+      expect_words(5, "property list COUNT_TYPE ITEM_TYPE NAME");
+      if (!ply_scalar_size(words[2]) || !ply_scalar_size(words[3]))
+        throw InputError(path, where + ": unknown list type '" + words[2] + " " + words[3] + "'");
+    } else {
+      expect_words(3, "property TYPE NAME");
+      if (!ply_scalar_size(type)) throw InputError(path, where + ": unknown property type '" + type + "'");
+    }
+  } else if (key == "end_header") {
+    expect_words(1, "end_header");
+  } else if (key != "comment" && key != "obj_info" && !key.empty()) {
+    // A line of no PLY keyword outside any definition (Stanford's
+    // happy_stand scans carry 'bye' lines) carries nothing a reader needs;
+    // OpenMesh skips its words one by one, as it does obj_info's, so the
+    // same guard applies. The warning is the caller's to give
+    // (io/ply_header.h, ply_header_warning()).
+    if (has_keyword)
+      throw InputError(path, where + ": a line of no PLY keyword holds one ('" + line +
+                                 "'), which OpenMesh would read as one");
+  }
+}
+
+// Holds the PLY header to OpenMesh's reading of it, so that everything its
+// reader would misinterpret (range grids, lists it skips wrongly, counts the
+// body cannot hold) is reported up front with a precise message.
 ExpectedCounts check_ply_header(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open the file for reading");
-  std::string line;
-  if (!std::getline(in, line)) throw InputError(path, "file is empty, expected a PLY mesh");
-  auto trim_cr = [](std::string& s) {
-    while (!s.empty() && (s.back() == '\r' || s.back() == ' ')) s.pop_back();
-  };
-  trim_cr(line);
-  if (line != "ply" && line != "PLY")
+  const PlyHeader header = parse_ply_header(in, kOpenMeshHeaderLines);
+  if (header.lines.empty()) throw InputError(path, "file is empty, expected a PLY mesh");
+  const std::string first = trimmed(header.lines[0].text);
+  if (first != "ply" && first != "PLY")
     throw InputError(path, "not a PLY file: the first line should be 'ply'");
-
-  struct Property {
-    std::string name;
-    std::string count_type;  // lists only
-    bool list = false;
-    int size = 0, count_size = 0;
-  };
-  struct Element {
-    std::string name;
-    std::size_t count = 0;
-    std::vector<Property> props;
-  };
-  std::vector<Element> elements;
-  std::string format;
-  bool ended = false;
-  for (int n = 2; !ended && n < 100000 && std::getline(in, line); ++n) {
-    trim_cr(line);
-    std::istringstream words(line);
-    std::string key;
-    words >> key;
-    const std::string where = "PLY header line " + std::to_string(n);
-    // OpenMesh reads the header as a stream of words, not lines: its format
-    // is the 2nd to 4th word, and a keyword anywhere (say after the version
-    // or in an obj_info line) starts a new entry, e.g. a property before any
-    // element, which it appends to an element that does not exist (a crash).
-    // So every line must have exactly the words its keyword takes.
-    std::size_t word_count = 0;
-    bool has_keyword = false;
-    {
-      std::istringstream all(line);
-      for (std::string w; all >> w; ++word_count)
-        has_keyword |= word_count > 0 && (w == "format" || w == "element" || w == "property" ||
-                                          w == "end_header" || w == "comment");
-    }
-    auto expect_words = [&](std::size_t count, const char* form) {
-      if (word_count != count)
-        throw InputError(path, where + ": expected '" + form + "', got '" + line + "'");
-    };
-    if ((n == 2) != (key == "format"))
-      throw InputError(path, where + ": expected the format line right after 'ply', and only there");
-    if (key == "obj_info" && has_keyword)
-      throw InputError(path, where + ": obj_info holds a PLY keyword, which OpenMesh would read as one");
-    if (key == "format") {
-      expect_words(3, "format FORMAT 1.0");
-      words >> format;
-      std::string version;
-      words >> version;
-      char* end = nullptr;
-      std::strtod(version.c_str(), &end);
-      if (end != version.c_str() + version.size())
-        throw InputError(path, where + ": version '" + version + "' is not a number");
-      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
-        throw InputError(path, where + ": unknown format '" + format +
-                                   "', expected ascii, binary_little_endian or binary_big_endian");
-    } else if (key == "element") {
-      expect_words(3, "element NAME COUNT");
-      Element e;
-      long long count = -1;
-      words >> e.name >> count;
-      if (!words || count < 0 || count > 0x7fffffffLL)
-        throw InputError(path, where + ": expected 'element NAME COUNT' with 0 <= COUNT < 2^31");
-      e.count = std::size_t(count);
-      elements.push_back(e);
-    } else if (key == "property") {
-      if (elements.empty()) throw InputError(path, where + ": property before any element");
-      Property p;
-      std::string type;
-      words >> type;
-      if (type == "list") expect_words(5, "property list COUNT_TYPE ITEM_TYPE NAME");
-      else expect_words(3, "property TYPE NAME");
-      if (type == "list") {
-        std::string count_type, item_type;
-        words >> count_type >> item_type >> p.name;
-        p.list = true;
-        p.count_type = count_type;
-        p.count_size = ply_type_size(count_type);
-        p.size = ply_type_size(item_type);
-        if (!p.count_size || !p.size)
-          throw InputError(path, where + ": unknown list type '" + count_type + " " +
-                                     item_type + "'");
-      } else {
-        words >> p.name;
-        p.size = ply_type_size(type);
-        if (!p.size) throw InputError(path, where + ": unknown property type '" + type + "'");
-      }
-      if (p.name.empty()) throw InputError(path, where + ": property has no name");
-      elements.back().props.push_back(p);
-    } else if (key == "end_header") {
-      expect_words(1, "end_header");
-      ended = true;
-    } else if (key != "comment" && key != "obj_info" && !key.empty()) {
-      // A line of no PLY keyword outside any definition (Stanford's
-      // happy_stand scans carry 'bye' lines) carries nothing a reader needs;
-      // OpenMesh skips its words one by one, as it does obj_info's, so the
-      // same guard applies. The warning is the caller's to give
-      // (acquisition/ply_header.h, ply_header_warning()).
-      if (has_keyword)
-        throw InputError(path, where + ": a line of no PLY keyword holds one ('" + line +
-                                   "'), which OpenMesh would read as one");
-    }
-  }
-  if (!ended) throw InputError(path, "PLY header has no end_header line");
-  if (format.empty()) throw InputError(path, "PLY header has no format line");
-  const std::streamoff header_end = in.tellg();  // -1 when the file ends at end_header
+  bool element_seen = false;
+  for (std::size_t i = 1; i < header.lines.size(); ++i) check_openmesh_words(path, header.lines[i], &element_seen);
+  if (!header.ended) throw InputError(path, "PLY header has no end_header line");
+  if (!header.has_format) throw InputError(path, "PLY header has no format line");
   const std::uintmax_t size = file_size_or_zero(path);
-  const std::uintmax_t body =
-      header_end < 0 || std::uintmax_t(header_end) > size ? 0 : size - std::uintmax_t(header_end);
+  const std::uintmax_t body = header.bytes > size ? 0 : size - header.bytes;
 
-  for (const Element& e : elements)
+  const std::vector<PlyElement>& elements = header.elements;
+  for (const PlyElement& e : elements)
     if (e.name == "range_grid")
       throw InputError(path, "is a Stanford range-grid PLY (element range_grid), i.e. one scan, "
                              "not a mesh: read it as a scan (list it in a .conf)");
-  const Element* vertex = nullptr;
-  const Element* face = nullptr;
+  const PlyElement* vertex = nullptr;
+  const PlyElement* face = nullptr;
   std::uintmax_t min_bytes = 0;  // the least body the header's counts need
-  const bool binary = format != "ascii";
-  for (const Element& e : elements) {
+  const bool binary = header.format != PlyHeader::Format::ascii;
+  for (const PlyElement& e : elements) {
     if (e.name == "vertex") vertex = &e;
     if (e.name == "face") {
       if (!vertex)
         throw InputError(path, "PLY element face comes before element vertex; "
                                "expected the vertices first");
       face = &e;
-      if (e.props.empty() || !e.props[0].list ||
-          (e.props[0].name != "vertex_indices" && e.props[0].name != "vertex_index"))
+      const std::vector<PlyProperty>& props = e.properties;
+      if (props.empty() || props[0].type != "list" ||
+          (props[0].name != "vertex_indices" && props[0].name != "vertex_index"))
         throw InputError(path, "PLY element face must start with a list property "
                                "vertex_indices");
-      const std::string& count_type = e.props[0].count_type;
+      const std::string& count_type = props[0].count_type;
       if (count_type != "uchar" && count_type != "uint8" && count_type != "uint16" &&
           count_type != "int")
         throw InputError(path, "PLY face list count type '" + count_type +
                                    "' is not supported; expected uchar, uint8, uint16 or int");
     }
     std::uintmax_t per = 0;
-    for (std::size_t i = 0; i < e.props.size(); ++i) {
-      const Property& p = e.props[i];
+    for (std::size_t i = 0; i < e.properties.size(); ++i) {
+      const PlyProperty& p = e.properties[i];
+      const bool list = p.type == "list";
       // OpenMesh skips the fields of other elements one scalar at a time, so
       // a list anywhere before the faces would shift everything after it.
-      if (p.list && !(&e == face && i == 0))
+      if (list && !(&e == face && i == 0))
         throw InputError(path, "PLY element " + e.name + " has a list property '" + p.name +
                                    "'; only face vertex_indices may be a list");
-      per += binary ? std::uintmax_t(p.list ? p.count_size + 3 * p.size : p.size)
-                    : (p.list ? 8 : 2);  // "3 a b c " / "v "
+      per += binary ? std::uintmax_t(list ? ply_scalar_size(p.count_type) + 3 * ply_scalar_size(p.index_type)
+                                          : ply_scalar_size(p.type))
+                    : (list ? 8 : 2);  // "3 a b c " / "v "
     }
     min_bytes += per * e.count;
     if (&e == face) break;  // nothing after the faces is read
@@ -393,7 +352,7 @@ ExpectedCounts check_ply_header(const std::string& path) {
   if (!vertex || vertex->count == 0) throw InputError(path, "has no vertices");
   {
     int xyz = 0;
-    for (const Property& p : vertex->props) xyz += p.name == "x" || p.name == "y" || p.name == "z";
+    for (const PlyProperty& p : vertex->properties) xyz += p.name == "x" || p.name == "y" || p.name == "z";
     if (xyz != 3) throw InputError(path, "PLY element vertex needs properties x, y and z");
   }
   if (!face || face->count == 0)

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/file_extension.h"
 #include "lod/model_pack.h"
 #include "lod/page_geometry.h"
 #include "lod/triangle_spool.h"
@@ -249,12 +250,6 @@ struct Section {
 };
 
 std::uint64_t padded(std::uint64_t n) { return (n + 7) & ~std::uint64_t(7); }
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
-}
 
 }  // namespace
 

@@ -32,6 +32,7 @@
 #include "core/flat_hash.h"
 #include "lod/mc_octree.h"
 #include "reconstruct/mesh_field.h"
+#include "spatial/point_index.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -14,6 +14,7 @@
 #include "reconstruct/resolution_guard.h"
 #include "reconstruct/signed_distance.h"
 #include "reconstruct/welded_surface.h"
+#include "spatial/point_index.h"
 
 #include <fcntl.h>
 #include <omp.h>

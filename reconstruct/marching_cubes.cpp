@@ -10,6 +10,7 @@
 #include "reconstruct/hole_filling.h"
 #include "reconstruct/open_loops.h"
 #include "reconstruct/resolution_guard.h"
+#include "spatial/point_index.h"
 
 #include <omp.h>
 

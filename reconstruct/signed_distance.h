@@ -1,11 +1,11 @@
 // Signed distance from oriented points at cube corners (Lee 2007, §4.2), with the
-// closest points found by FLANN's exact kd-tree. Positive outside, negative inside.
+// closest points found by an exact kd-tree (spatial/point_index.h). Positive
+// outside, negative inside.
 #pragma once
 
 #include "core/types.h"
 
 #include <functional>
-#include <memory>
 #include <string>
 
 namespace scan2lod {
@@ -33,25 +33,7 @@ struct SignedDistanceOptions {
   float max_distance = 4.0f;
 };
 
-// An exact kd-tree over the points' positions (FLANN KDTreeSingleIndex).
-class PointIndex {
- public:
-  explicit PointIndex(const OrientedPoints& points);
-  ~PointIndex();
-  PointIndex(const PointIndex&) = delete;
-  PointIndex& operator=(const PointIndex&) = delete;
-
-  // For each query, the k nearest points (indices, squared distances), row-major
-  // count x k; equal distances in index order, and a tie at the k-th broken by
-  // index, so that any subset that holds them (a brick) gives the same
-  // neighbours in the same order. Runs on `threads` threads (0: all).
-  void knn(const Vec3f* queries, std::size_t count, int k, std::int32_t* indices,
-           float* squared_distances, int threads) const;
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
+class PointIndex;  // spatial/point_index.h
 
 // Signed distance at each query position.
 // @param[in]  points     oriented points (spacing optional: empty = cube size)

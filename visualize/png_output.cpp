@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/file_extension.h"
 
 #include <vtkNew.h>
 #include <vtkPNGWriter.h>
@@ -17,8 +18,7 @@ namespace scan2lod {
 
 void check_png_output(const std::string& path) {
   const std::filesystem::path p(path);
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  const std::string ext = lower_extension(path);
   if (ext != ".png") throw InputError(path, "output must be a .png picture, got extension '" + ext + "'");
   const std::filesystem::path folder = p.has_parent_path() ? p.parent_path() : std::filesystem::path(".");
   if (!std::filesystem::is_directory(folder))

@@ -4,6 +4,7 @@
 #include "acquisition/scan_set.h"
 #include "core/error.h"
 #include "core/mesh_edges.h"
+#include "io/file_extension.h"
 #include "io/mesh_file.h"
 #include "lod/model_file.h"
 #include "lod/paged_model.h"
@@ -57,12 +58,6 @@ using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
 }
 
 // A .ply is a scan when its header declares a range grid (as acquisition/ reads it).
