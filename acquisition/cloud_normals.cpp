@@ -1,8 +1,8 @@
-#include "acquisition/cloud_normals.h"
+#include <scan2lod/acquisition/cloud_normals.h>
 
-#include "core/error.h"
-#include "core/progress.h"
-#include "spatial/point_index.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/spatial/point_index.h>
 
 #include <open3d/geometry/KDTreeSearchParam.h>
 #include <open3d/geometry/PointCloud.h>

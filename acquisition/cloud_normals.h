@@ -6,8 +6,8 @@
 // airborne, +Z), toward it.
 #pragma once
 
-#include "acquisition/point_cloud_files.h"
-#include "core/types.h"
+#include <scan2lod/acquisition/point_cloud_files.h>
+#include <scan2lod/core/types.h>
 
 namespace scan2lod {
 

@@ -1,6 +1,6 @@
-#include "acquisition/las_file.h"
+#include <scan2lod/acquisition/las_file.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <algorithm>
 #include <array>

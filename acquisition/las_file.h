@@ -13,8 +13,8 @@
 // shifted back into the file's frame.
 #pragma once
 
-#include "acquisition/point_cloud_files.h"
-#include "core/types.h"
+#include <scan2lod/acquisition/point_cloud_files.h>
+#include <scan2lod/core/types.h>
 
 #include <cstdint>
 #include <optional>

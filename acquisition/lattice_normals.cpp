@@ -1,4 +1,4 @@
-#include "acquisition/lattice_normals.h"
+#include <scan2lod/acquisition/lattice_normals.h>
 
 #include <cmath>
 #include <limits>

@@ -3,7 +3,7 @@
 // 4-neighbours in the lattice, turned toward the scanner (+z in the scan frame).
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 namespace scan2lod {
 

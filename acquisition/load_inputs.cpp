@@ -1,17 +1,17 @@
-#include "acquisition/load_inputs.h"
+#include <scan2lod/acquisition/load_inputs.h>
 
-#include "acquisition/cloud_normals.h"
-#include "acquisition/las_file.h"
-#include "acquisition/mesh_points.h"
-#include "acquisition/organized_pcd.h"
-#include "acquisition/point_cloud_files.h"
-#include "acquisition/range_grid_ply.h"
-#include "core/error.h"
-#include "core/parallel_jobs.h"
-#include "core/progress.h"
-#include "io/file_extension.h"
-#include "io/mesh_file.h"
-#include "io/ply_header.h"
+#include <scan2lod/acquisition/cloud_normals.h>
+#include <scan2lod/acquisition/las_file.h>
+#include <scan2lod/acquisition/mesh_points.h>
+#include <scan2lod/acquisition/organized_pcd.h>
+#include <scan2lod/acquisition/point_cloud_files.h>
+#include <scan2lod/acquisition/range_grid_ply.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/parallel_jobs.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/io/file_extension.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/io/ply_header.h>
 
 #include <omp.h>
 

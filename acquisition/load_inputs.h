@@ -4,9 +4,9 @@
 // text, LAS), or meshes (.ply with faces, .obj, .off, .stl).
 #pragma once
 
-#include "acquisition/cloud_normals.h"
-#include "acquisition/lattice_normals.h"
-#include "core/types.h"
+#include <scan2lod/acquisition/cloud_normals.h>
+#include <scan2lod/acquisition/lattice_normals.h>
+#include <scan2lod/core/types.h>
 
 #include <functional>
 #include <string>

@@ -1,4 +1,4 @@
-#include "acquisition/mesh_points.h"
+#include <scan2lod/acquisition/mesh_points.h>
 
 #include <cassert>
 #include <cmath>

@@ -3,7 +3,7 @@
 // normal as the normal of this point."
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 namespace scan2lod {
 

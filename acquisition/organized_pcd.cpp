@@ -1,7 +1,7 @@
-#include "acquisition/organized_pcd.h"
+#include <scan2lod/acquisition/organized_pcd.h>
 
-#include "acquisition/text_records.h"
-#include "core/error.h"
+#include <scan2lod/acquisition/text_records.h>
+#include <scan2lod/core/error.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/common/io.h>

@@ -2,8 +2,8 @@
 // as range images, unorganized ones (height 1) as point clouds.
 #pragma once
 
-#include "acquisition/point_cloud_files.h"
-#include "core/types.h"
+#include <scan2lod/acquisition/point_cloud_files.h>
+#include <scan2lod/core/types.h>
 
 #include <string>
 

@@ -1,9 +1,9 @@
-#include "acquisition/point_cloud_files.h"
+#include <scan2lod/acquisition/point_cloud_files.h>
 
-#include "acquisition/text_records.h"
-#include "core/error.h"
-#include "io/atomic_file.h"
-#include "io/ply_header.h"
+#include <scan2lod/acquisition/text_records.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/io/ply_header.h>
 
 #include <algorithm>
 #include <charconv>

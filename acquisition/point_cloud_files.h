@@ -5,7 +5,7 @@
 // are estimated where the file has none (cloud_normals.h).
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <optional>
 #include <string>

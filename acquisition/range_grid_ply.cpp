@@ -1,9 +1,9 @@
-#include "acquisition/range_grid_ply.h"
+#include <scan2lod/acquisition/range_grid_ply.h>
 
-#include "acquisition/text_records.h"
-#include "core/error.h"
-#include "io/atomic_file.h"
-#include "io/ply_header.h"
+#include <scan2lod/acquisition/text_records.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/io/ply_header.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/ply_io.h>

@@ -4,7 +4,7 @@
 // messages a user can act on.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <string>
 #include <vector>

@@ -1,10 +1,10 @@
-#include "acquisition/scan_set.h"
+#include <scan2lod/acquisition/scan_set.h>
 
-#include "acquisition/organized_pcd.h"
-#include "acquisition/range_grid_ply.h"
-#include "core/error.h"
-#include "core/parallel_jobs.h"
-#include "io/file_extension.h"
+#include <scan2lod/acquisition/organized_pcd.h>
+#include <scan2lod/acquisition/range_grid_ply.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/parallel_jobs.h>
+#include <scan2lod/io/file_extension.h>
 
 #include <cctype>
 #include <cstdio>

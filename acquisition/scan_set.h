@@ -3,7 +3,7 @@
 // formats and to write virtual scans.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <string>
 #include <vector>

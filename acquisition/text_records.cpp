@@ -1,6 +1,6 @@
-#include "acquisition/text_records.h"
+#include <scan2lod/acquisition/text_records.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <fstream>
 

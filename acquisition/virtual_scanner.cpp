@@ -1,9 +1,9 @@
-#include "acquisition/virtual_scanner.h"
+#include <scan2lod/acquisition/virtual_scanner.h>
 
-#include "acquisition/lattice_normals.h"
-#include "acquisition/range_grid_ply.h"
-#include "core/error.h"
-#include "core/progress.h"
+#include <scan2lod/acquisition/lattice_normals.h>
+#include <scan2lod/acquisition/range_grid_ply.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
 
 #include <Eigen/Geometry>
 

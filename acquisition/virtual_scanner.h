@@ -6,8 +6,8 @@
 // scans and real ones go through the same reconstruction.
 #pragma once
 
-#include "acquisition/scan_set.h"
-#include "core/types.h"
+#include <scan2lod/acquisition/scan_set.h>
+#include <scan2lod/core/types.h>
 
 #include <string>
 #include <vector>

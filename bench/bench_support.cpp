@@ -1,7 +1,7 @@
-#include "bench/bench_support.h"
+#include <scan2lod/bench/bench_support.h>
 
-#include "acquisition/load_inputs.h"
-#include "core/error.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/core/error.h>
 
 #include <signal.h>
 #include <sys/resource.h>

@@ -9,7 +9,7 @@
 // survive fork. load_points_in_child() is there for that reason.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <array>
 #include <chrono>

@@ -14,13 +14,13 @@
 //     --runs    timed runs per case, the median reported (default 5)
 //     --copies  the merged cloud written K times over into each cloud file,
 //               for files large enough to use both cores (default 1)
-#include "acquisition/load_inputs.h"
-#include "acquisition/las_file.h"
-#include "acquisition/organized_pcd.h"
-#include "acquisition/point_cloud_files.h"
-#include "acquisition/range_grid_ply.h"
-#include "bench/bench_support.h"
-#include "core/progress.h"
+#include <scan2lod/acquisition/las_file.h>
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/acquisition/organized_pcd.h>
+#include <scan2lod/acquisition/point_cloud_files.h>
+#include <scan2lod/acquisition/range_grid_ply.h>
+#include <scan2lod/bench/bench_support.h>
+#include <scan2lod/core/progress.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "bench/library_meshes.h"
+#include <scan2lod/bench/library_meshes.h>
 
 #include <vtkCellArray.h>
 #include <vtkIdList.h>

@@ -3,7 +3,7 @@
 // nothing else enters a measure.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <open3d/geometry/TriangleMesh.h>
 #include <vtkPolyData.h>

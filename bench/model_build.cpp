@@ -1,6 +1,6 @@
-#include "bench/model_build.h"
+#include <scan2lod/bench/model_build.h>
 
-#include "pipeline/build_model.h"
+#include <scan2lod/pipeline/build_model.h>
 
 namespace scan2lod::bench {
 

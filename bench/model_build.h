@@ -4,8 +4,8 @@
 // scaling over R.
 #pragma once
 
-#include "core/types.h"
-#include "lod/lod_model.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/lod/lod_model.h>
 
 namespace scan2lod::bench {
 

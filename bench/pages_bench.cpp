@@ -1,4 +1,4 @@
-// Reading a model page by page (lod/paged_model.h, lod/paged_view.h):
+// Reading a model page by page (lod/clusters/paged_model.h, lod/clusters/paged_view.h):
 //   cuts      camera cuts at 1 px from near to far, each read cold: the cut's
 //             own bytes (its triangles and vertices as a mesh) against the
 //             bytes of the pages read for it (the target: at most 3x);
@@ -11,9 +11,9 @@
 //             the budget coarsened, pages prefetched.
 //
 //   scan2lod_bench_pages MODEL.mco [--cache 256M] [--height 1080] [--no-peer]
-#include "lod/model_file.h"
-#include "lod/paged_model.h"
-#include "lod/paged_view.h"
+#include <scan2lod/lod/clusters/paged_model.h>
+#include <scan2lod/lod/clusters/paged_view.h>
+#include <scan2lod/lod/model_file.h>
 
 #include <algorithm>
 #include <chrono>

@@ -41,18 +41,18 @@
 //
 // Output: a markdown report on stdout; progress on stderr.
 
-#include "acquisition/load_inputs.h"
-#include "bench/bench_support.h"
-#include "bench/library_meshes.h"
-#include "bench/model_build.h"
-#include "core/error.h"
-#include "core/progress.h"
-#include "core/types.h"
-#include "io/mesh_file.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "reconstruct/cube_grid.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/bench/bench_support.h>
+#include <scan2lod/bench/library_meshes.h>
+#include <scan2lod/bench/model_build.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/core/types.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/cube_grid.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <CLI/CLI.hpp>
 #include <open3d/geometry/PointCloud.h>

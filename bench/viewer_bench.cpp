@@ -9,7 +9,7 @@
 // so that upload ~ render - redraw. Needs an X display: run under xvfb-run.
 //
 //   xvfb-run -a build/bin/scan2lod_bench_viewer MODEL.mco [--size 1200x800] [--passes 3]
-#include "visualize/viewer.h"
+#include <scan2lod/visualize/viewer.h>
 
 #include <vtkRenderWindowInteractor.h>
 

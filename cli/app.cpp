@@ -1,9 +1,9 @@
-#include "cli/app.h"
+#include <scan2lod/cli/app.h>
 
-#include "cli/exit_codes.h"
-#include "cli/terminal.h"
-#include "cli/usage.h"
-#include "lod/model_file.h"
+#include <scan2lod/cli/exit_codes.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/cli/usage.h>
+#include <scan2lod/lod/model_file.h>
 
 #include <cstdio>
 #include <string>

@@ -1,15 +1,15 @@
 // scan2lod build: inputs -> reconstruction -> LOD structures -> .mco model,
 // in one run: the prioritized marching-cube octree (Lee 2007) and the cluster
 // hierarchy (Cignoni et al. 2005), or either alone.
-#include "cli/commands.h"
-#include "cli/outputs.h"
-#include "cli/reconstruct_flags.h"
-#include "cli/terminal.h"
-#include "core/progress.h"
-#include "distributed/work_sharing.h"
-#include "io/atomic_file.h"
-#include "lod/model_file.h"
-#include "pipeline/build_model.h"
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/outputs.h>
+#include <scan2lod/cli/reconstruct_flags.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/distributed/work_sharing.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/pipeline/build_model.h>
 
 #include <nlohmann/json.hpp>
 

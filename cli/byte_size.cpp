@@ -1,4 +1,4 @@
-#include "cli/byte_size.h"
+#include <scan2lod/cli/byte_size.h>
 
 #include <cctype>
 #include <cmath>

@@ -1,8 +1,8 @@
-#include "cli/commands.h"
-#include "cli/terminal.h"
-#include "core/error.h"
-#include "measure/compare_files.h"
-#include "measure/comparison_json.h"
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/measure/compare_files.h>
+#include <scan2lod/measure/comparison_json.h>
 
 #include <nlohmann/json.hpp>
 

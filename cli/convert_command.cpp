@@ -1,8 +1,8 @@
-#include "acquisition/scan_set.h"
-#include "cli/commands.h"
-#include "cli/terminal.h"
-#include "cli/usage.h"
-#include "io/atomic_file.h"
+#include <scan2lod/acquisition/scan_set.h>
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/cli/usage.h>
+#include <scan2lod/io/atomic_file.h>
 
 #include <nlohmann/json.hpp>
 

@@ -3,19 +3,19 @@
 // vertices (io/gltf_file.h); a mesh format writes one file per level;
 // --format 3dtiles writes a 3D Tiles 1.1 tileset folder (delivery/tileset.h)
 // and the web page that views it (delivery/viewer_page.h).
-#include "cli/commands.h"
-#include "cli/outputs.h"
-#include "cli/terminal.h"
-#include "core/error.h"
-#include "core/progress.h"
-#include "delivery/tileset.h"
-#include "delivery/viewer_page.h"
-#include "io/gltf_file.h"
-#include "io/mesh_file.h"
-#include "lod/level_chain.h"
-#include "lod/lod_model.h"
-#include "lod/percent_shortfall.h"
-#include "lod/model_file.h"
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/outputs.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/delivery/tileset.h>
+#include <scan2lod/delivery/viewer_page.h>
+#include <scan2lod/io/gltf_file.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/level_chain.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/percent_shortfall.h>
 
 #include <nlohmann/json.hpp>
 

@@ -1,18 +1,18 @@
 // scan2lod extract: one mesh out of a .mco model, taken by reference from
 // either LOD structure (lod/lod_model.h): by percent, triangle budget,
 // object-space error, camera, or (octree) priority number.
-#include "cli/byte_size.h"
-#include "cli/commands.h"
-#include "cli/outputs.h"
-#include "cli/terminal.h"
-#include "core/error.h"
-#include "io/mesh_file.h"
-#include "lod/level_chain.h"
-#include "lod/level_choice.h"
-#include "lod/lod_model.h"
-#include "lod/percent_shortfall.h"
-#include "lod/model_file.h"
-#include "lod/paged_model.h"
+#include <scan2lod/cli/byte_size.h>
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/outputs.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/clusters/paged_model.h>
+#include <scan2lod/lod/level_chain.h>
+#include <scan2lod/lod/level_choice.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/percent_shortfall.h>
 
 #include <nlohmann/json.hpp>
 

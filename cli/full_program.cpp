@@ -1,6 +1,6 @@
-#include "cli/full_program.h"
+#include <scan2lod/cli/full_program.h>
 
-#include "cli/exit_codes.h"
+#include <scan2lod/cli/exit_codes.h>
 
 #include <unistd.h>
 

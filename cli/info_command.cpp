@@ -1,9 +1,9 @@
 // scan2lod info: what a .mco model holds, and the size of each structure's
 // levels at the usual percentages (Lee 2007, Figs. 6.3-6.4).
-#include "cli/commands.h"
-#include "cli/terminal.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
 
 #include <nlohmann/json.hpp>
 

@@ -2,7 +2,7 @@
 // line that names a .vtp file runs in scan2lod-full (cli/full_program.h).
 // Defined here, they keep the linker from taking io/vtp_file.cpp, and with
 // it VTK, from the library.
-#include "io/vtp_file.h"
+#include <scan2lod/io/vtp_file.h>
 
 #include <stdexcept>
 

@@ -2,9 +2,9 @@
 // here, in a program that maps no PCL, VTK or Open3D library (about 170
 // shared objects, most of a short command's start); every other command, and
 // any that names a .vtp file, runs in scan2lod-full (cli/full_program.h).
-#include "cli/app.h"
-#include "cli/commands.h"
-#include "cli/full_program.h"
+#include <scan2lod/cli/app.h>
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/full_program.h>
 
 int main(int argc, char** argv) {
   using namespace scan2lod::cli;

@@ -1,7 +1,7 @@
 // scan2lod-full: every command. `scan2lod` runs this program for the
 // commands that need PCL, VTK or Open3D (cli/full_program.h).
-#include "cli/app.h"
-#include "cli/commands.h"
+#include <scan2lod/cli/app.h>
+#include <scan2lod/cli/commands.h>
 
 int main(int argc, char** argv) {
   using namespace scan2lod::cli;

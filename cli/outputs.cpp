@@ -1,7 +1,7 @@
-#include "cli/outputs.h"
+#include <scan2lod/cli/outputs.h>
 
-#include "core/error.h"
-#include "io/file_extension.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/file_extension.h>
 
 #include <filesystem>
 

@@ -2,15 +2,15 @@
 // octree's: Lee 2007, Figs. 6.6-6.8; the cluster hierarchy's: error, clusters
 // and vertices against triangles), plus error against triangles given a
 // reference mesh.
-#include "cli/commands.h"
-#include "cli/terminal.h"
-#include "io/atomic_file.h"
-#include "io/mesh_file.h"
-#include "lod/model_file.h"
-#include "visualize/levels.h"
-#include "visualize/montage.h"
-#include "visualize/plots.h"
-#include "visualize/png_output.h"
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/visualize/levels.h>
+#include <scan2lod/visualize/montage.h>
+#include <scan2lod/visualize/plots.h>
+#include <scan2lod/visualize/png_output.h>
 
 #include <nlohmann/json.hpp>
 

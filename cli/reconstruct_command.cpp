@@ -1,10 +1,10 @@
-#include "acquisition/load_inputs.h"
-#include "cli/commands.h"
-#include "cli/outputs.h"
-#include "cli/reconstruct_flags.h"
-#include "cli/terminal.h"
-#include "io/mesh_file.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/outputs.h>
+#include <scan2lod/cli/reconstruct_flags.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <nlohmann/json.hpp>
 

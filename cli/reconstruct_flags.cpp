@@ -1,9 +1,9 @@
-#include "cli/reconstruct_flags.h"
+#include <scan2lod/cli/reconstruct_flags.h>
 
-#include "cli/byte_size.h"
-#include "cli/terminal.h"
-#include "cli/usage.h"
-#include "core/error.h"
+#include <scan2lod/cli/byte_size.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/cli/usage.h>
+#include <scan2lod/core/error.h>
 
 #include <cstdio>
 #include <filesystem>

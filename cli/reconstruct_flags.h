@@ -2,9 +2,9 @@
 // one onto ReconstructOptions (reconstruct/marching_cubes.h).
 #pragma once
 
-#include "acquisition/load_inputs.h"
-#include "pipeline/build_model.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/pipeline/build_model.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <CLI/CLI.hpp>
 

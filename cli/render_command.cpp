@@ -1,16 +1,16 @@
 // scan2lod render: levels of a .mco model (of its cluster hierarchy or its
 // octree, --structure) off-screen into one PNG montage, the layout of the
 // Lee 2007's Fig. 6.3 (wireframe beside shaded, one row per level).
-#include "cli/commands.h"
-#include "cli/terminal.h"
-#include "core/error.h"
-#include "io/atomic_file.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
-#include "visualize/levels.h"
-#include "visualize/montage.h"
-#include "visualize/png_output.h"
-#include "visualize/scene.h"
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/visualize/levels.h>
+#include <scan2lod/visualize/montage.h>
+#include <scan2lod/visualize/png_output.h>
+#include <scan2lod/visualize/scene.h>
 
 #include <nlohmann/json.hpp>
 

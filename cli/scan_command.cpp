@@ -1,10 +1,10 @@
 // `scan2lod scan MESH -o DIR`: virtual range scans of a mesh (Lee 2007, §4.4),
 // written as a Stanford-style scan set that `reconstruct` reads back.
-#include "acquisition/virtual_scanner.h"
-#include "cli/commands.h"
-#include "cli/terminal.h"
-#include "io/atomic_file.h"
-#include "io/mesh_file.h"
+#include <scan2lod/acquisition/virtual_scanner.h>
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/io/mesh_file.h>
 
 #include <nlohmann/json.hpp>
 

@@ -1,10 +1,10 @@
 // scan2lod serve: a tileset's folder over HTTP on this machine
 // (delivery/folder_server.h), so that a browser can open the page export
 // wrote beside it. Runs until Ctrl-C (SIGINT) or SIGTERM.
-#include "cli/commands.h"
-#include "cli/terminal.h"
-#include "core/error.h"
-#include "delivery/folder_server.h"
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/cli/terminal.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/delivery/folder_server.h>
 
 #include <chrono>
 #include <csignal>

@@ -1,8 +1,8 @@
-#include "cli/terminal.h"
+#include <scan2lod/cli/terminal.h>
 
-#include "cli/exit_codes.h"
-#include "core/error.h"
-#include "core/progress.h"
+#include <scan2lod/cli/exit_codes.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
 
 #include <unistd.h>
 

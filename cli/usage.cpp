@@ -1,6 +1,6 @@
-#include "cli/usage.h"
+#include <scan2lod/cli/usage.h>
 
-#include "cli/terminal.h"
+#include <scan2lod/cli/terminal.h>
 
 #include <algorithm>
 #include <cstring>

@@ -1,14 +1,14 @@
 // scan2lod view: the interactive VTK viewer on a .mco model, a mesh or a scan
 // set (visualize/viewer.h). --script drives it without a human: the same
 // slider moves and key presses, then it exits.
-#include "cli/byte_size.h"
-#include "cli/commands.h"
-#include "core/error.h"
-#include "io/atomic_file.h"
-#include "visualize/levels.h"
-#include "visualize/montage.h"
-#include "visualize/png_output.h"
-#include "visualize/viewer.h"
+#include <scan2lod/cli/byte_size.h>
+#include <scan2lod/cli/commands.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/visualize/levels.h>
+#include <scan2lod/visualize/montage.h>
+#include <scan2lod/visualize/png_output.h>
+#include <scan2lod/visualize/viewer.h>
 
 #include <cstdio>
 #include <filesystem>

@@ -16,9 +16,10 @@ foreach(header
     core/parallel_jobs.h core/flat_hash.h
     io/atomic_file.h io/gltf_file.h
     delivery/tileset.h delivery/tile_glb.h delivery/tile_tree.h
-    lod/lod_model.h lod/model_file.h lod/mc_octree.h lod/lod_array.h lod/extract.h lod/transition.h
-    lod/lod_cursor.h lod/cluster_hierarchy.h lod/cluster_cut.h lod/level_budget.h lod/page_geometry.h
-    lod/paged_model.h lod/paged_view.h
+    lod/lod_model.h lod/model_file.h lod/level_budget.h
+    lod/octree/mc_octree.h lod/octree/lod_array.h lod/octree/extract.h lod/octree/transition.h lod/octree/lod_cursor.h
+    lod/clusters/cluster_hierarchy.h lod/clusters/cluster_cut.h lod/clusters/page_geometry.h
+    lod/clusters/paged_model.h lod/clusters/paged_view.h
     reconstruct/marching_cubes.h reconstruct/signed_distance.h reconstruct/cube_grid.h reconstruct/cube_table.h)
   get_filename_component(folder ${header} DIRECTORY)
   install(FILES ${header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scan2lod/${folder})

@@ -1,4 +1,4 @@
-#include "core/compact_mesh.h"
+#include <scan2lod/core/compact_mesh.h>
 
 namespace scan2lod {
 

@@ -3,8 +3,8 @@
 // into a self-contained mesh.
 #pragma once
 
-#include "core/array_view.h"
-#include "core/types.h"
+#include <scan2lod/core/array_view.h>
+#include <scan2lod/core/types.h>
 
 #include <vector>
 

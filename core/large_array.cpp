@@ -1,4 +1,4 @@
-#include "core/large_array.h"
+#include <scan2lod/core/large_array.h>
 
 #include <cstdint>
 

@@ -1,4 +1,4 @@
-#include "core/mesh_edges.h"
+#include <scan2lod/core/mesh_edges.h>
 
 #include <algorithm>
 

@@ -5,8 +5,8 @@
 // side was most of their cost.
 #pragma once
 
-#include "core/array_view.h"
-#include "core/types.h"
+#include <scan2lod/core/array_view.h>
+#include <scan2lod/core/types.h>
 
 #include <array>
 #include <cstdint>

@@ -1,6 +1,6 @@
-#include "core/parallel_jobs.h"
+#include <scan2lod/core/parallel_jobs.h>
 
-#include "core/progress.h"
+#include <scan2lod/core/progress.h>
 
 #include <omp.h>
 

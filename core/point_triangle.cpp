@@ -1,4 +1,4 @@
-#include "core/point_triangle.h"
+#include <scan2lod/core/point_triangle.h>
 
 namespace scan2lod {
 

@@ -3,7 +3,7 @@
 // measures and the cluster hierarchy's group errors are made of.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 namespace scan2lod {
 

@@ -1,4 +1,4 @@
-#include "core/progress.h"
+#include <scan2lod/core/progress.h>
 
 #include <chrono>
 #include <utility>

@@ -1,4 +1,4 @@
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <Eigen/Geometry>
 

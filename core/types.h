@@ -2,7 +2,7 @@
 // OpenMesh meshes, VTK poly data) stay at the edges; these are what stages share.
 #pragma once
 
-#include "core/array_view.h"
+#include <scan2lod/core/array_view.h>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

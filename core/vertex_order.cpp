@@ -1,7 +1,7 @@
-#include "core/vertex_order.h"
+#include <scan2lod/core/vertex_order.h>
 
-#include "core/morton.h"
-#include "core/sort_on_cores.h"
+#include <scan2lod/core/morton.h>
+#include <scan2lod/core/sort_on_cores.h>
 
 #include <algorithm>
 #include <cstdint>

@@ -1,7 +1,7 @@
 // One vertex order for a mesh, whatever order its vertices came in.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 namespace scan2lod {
 

@@ -1,7 +1,7 @@
-#include "delivery/folder_server.h"
+#include <scan2lod/delivery/folder_server.h>
 
-#include "core/error.h"
-#include "io/file_extension.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/file_extension.h>
 
 #include <httplib.h>
 

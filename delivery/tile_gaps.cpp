@@ -1,4 +1,4 @@
-#include "delivery/tile_gaps.h"
+#include <scan2lod/delivery/tile_gaps.h>
 
 #include <algorithm>
 #include <cmath>

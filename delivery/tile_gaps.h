@@ -9,7 +9,7 @@
 // of the two tiles plus `tolerance` (a quantization step: less is not seen).
 #pragma once
 
-#include "delivery/tile_tree.h"
+#include <scan2lod/delivery/tile_tree.h>
 
 #include <cstdint>
 #include <vector>

@@ -1,4 +1,4 @@
-#include "delivery/tile_glb.h"
+#include <scan2lod/delivery/tile_glb.h>
 
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>

@@ -17,9 +17,9 @@
 // codecs compress better.
 #pragma once
 
-#include "core/types.h"
-#include "io/gltf_file.h"
-#include "lod/mc_octree.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/io/gltf_file.h>
+#include <scan2lod/lod/octree/mc_octree.h>
 
 #include <cstdint>
 #include <string>

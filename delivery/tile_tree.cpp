@@ -1,6 +1,6 @@
-#include "delivery/tile_tree.h"
+#include <scan2lod/delivery/tile_tree.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // From the cluster DAG to a tree of tiles (3D Tiles 1.1, REPLACE refinement).
 //
-// The cluster hierarchy (lod/cluster_hierarchy.h) is a DAG: a group's clusters
+// The cluster hierarchy (lod/clusters/cluster_hierarchy.h) is a DAG: a group's clusters
 // come from several clusters below, which other groups share. 3D Tiles wants a
 // tree. The tree here is spatial: an octree over the model's bounds, each cell
 // holding one cut of the DAG restricted to the cell, finer going down, as
@@ -26,8 +26,8 @@
 // children's where a child's is larger, so that errors never grow going down.
 #pragma once
 
-#include "core/types.h"
-#include "lod/lod_model.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/lod/lod_model.h>
 
 #include <cstdint>
 #include <functional>
@@ -45,7 +45,7 @@ struct TileOptions {
   std::function<void(double)> progress;
 };
 
-// A threshold of the uniform cut (lod/cluster_cut.h): a group is applied when
+// A threshold of the uniform cut (lod/clusters/cluster_cut.h): a group is applied when
 // its error is at most the threshold. kFullDetail applies none.
 constexpr float kFullDetail = -1.f;
 

@@ -1,6 +1,6 @@
-#include "delivery/tileset.h"
+#include <scan2lod/delivery/tileset.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <nlohmann/json.hpp>
 

@@ -20,9 +20,9 @@
 // tileset there is replaced; any other folder is refused).
 #pragma once
 
-#include "delivery/tile_glb.h"
-#include "delivery/tile_tree.h"
-#include "lod/lod_model.h"
+#include <scan2lod/delivery/tile_glb.h>
+#include <scan2lod/delivery/tile_tree.h>
+#include <scan2lod/lod/lod_model.h>
 
 #include <cstdint>
 #include <functional>

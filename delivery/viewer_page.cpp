@@ -1,7 +1,7 @@
-#include "delivery/viewer_page.h"
+#include <scan2lod/delivery/viewer_page.h>
 
-#include "core/error.h"
-#include "io/atomic_file.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/atomic_file.h>
 
 #include <cstdio>
 #include <filesystem>

@@ -4,7 +4,7 @@
 // and sleep instead of MPI's blocking calls, which spin: a rank that waits
 // must leave its core to the ranks that work beside it (two ranks on two
 // cores, or more ranks than cores).
-#include "distributed/mpi_work_sharing.h"
+#include <scan2lod/distributed/mpi_work_sharing.h>
 
 // The C API only: mpi.h would otherwise pull in MPI's old C++ bindings,
 // which need a library the C target does not link.

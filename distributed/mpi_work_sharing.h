@@ -2,7 +2,7 @@
 // from mpi_work_sharing.cpp when CMake found MPI, else from no_mpi.cpp.
 #pragma once
 
-#include "distributed/work_sharing.h"
+#include <scan2lod/distributed/work_sharing.h>
 
 #include <memory>
 

@@ -1,5 +1,5 @@
 // Built when CMake found no MPI: every job is this process alone.
-#include "distributed/mpi_work_sharing.h"
+#include <scan2lod/distributed/mpi_work_sharing.h>
 
 namespace scan2lod {
 

@@ -1,7 +1,7 @@
-#include "distributed/work_sharing.h"
+#include <scan2lod/distributed/work_sharing.h>
 
-#include "core/error.h"
-#include "distributed/mpi_work_sharing.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/distributed/mpi_work_sharing.h>
 
 #include <cstdlib>
 #include <string>

@@ -1,6 +1,6 @@
-#include "io/atomic_file.h"
+#include <scan2lod/io/atomic_file.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <fcntl.h>
 #include <limits.h>

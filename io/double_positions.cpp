@@ -1,8 +1,8 @@
-#include "io/double_positions.h"
+#include <scan2lod/io/double_positions.h>
 
-#include "core/error.h"
-#include "io/line_writer.h"
-#include "io/ply_header.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/line_writer.h>
+#include <scan2lod/io/ply_header.h>
 
 #include <algorithm>
 #include <charconv>

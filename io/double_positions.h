@@ -5,7 +5,7 @@
 // everything else.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <cstddef>
 #include <string>

@@ -1,4 +1,4 @@
-#include "io/file_extension.h"
+#include <scan2lod/io/file_extension.h>
 
 #include <cctype>
 #include <filesystem>

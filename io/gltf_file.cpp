@@ -1,9 +1,9 @@
-#include "io/gltf_file.h"
+#include <scan2lod/io/gltf_file.h>
 
-#include "core/error.h"
-#include "io/atomic_file.h"
-#include "io/file_extension.h"
-#include "io/used_vertices.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/io/file_extension.h>
+#include <scan2lod/io/used_vertices.h>
 
 // Debian's libtinygltf is built with nlohmann_json; no images are written,
 // so stb is not needed.

@@ -16,7 +16,7 @@
 // the screen at which that level is still drawn.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <string>
 #include <vector>

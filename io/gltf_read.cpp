@@ -1,7 +1,7 @@
-#include "io/gltf_read.h"
+#include <scan2lod/io/gltf_read.h>
 
-#include "core/error.h"
-#include "io/local_origin.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/local_origin.h>
 
 // As in gltf_file.cpp: Debian's shared libtinygltf holds the implementation;
 // images are never decoded here, so stb is not needed.

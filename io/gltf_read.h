@@ -13,7 +13,7 @@
 // or plain 8- and 16-bit integers, interleaved or not, sparse or not.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <string>
 

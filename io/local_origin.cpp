@@ -1,4 +1,4 @@
-#include "io/local_origin.h"
+#include <scan2lod/io/local_origin.h>
 
 #include <algorithm>
 #include <cmath>

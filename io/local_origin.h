@@ -5,7 +5,7 @@
 // it is, so that reading it with an origin changes nothing.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <vector>
 

@@ -1,16 +1,16 @@
-#include "io/mesh_file.h"
+#include <scan2lod/io/mesh_file.h>
 
-#include "core/error.h"
-#include "io/atomic_file.h"
-#include "io/double_positions.h"
-#include "io/file_extension.h"
-#include "io/gltf_file.h"
-#include "io/gltf_read.h"
-#include "io/local_origin.h"
-#include "io/obj_writer.h"
-#include "io/ply_header.h"
-#include "io/used_vertices.h"
-#include "io/vtp_file.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/io/double_positions.h>
+#include <scan2lod/io/file_extension.h>
+#include <scan2lod/io/gltf_file.h>
+#include <scan2lod/io/gltf_read.h>
+#include <scan2lod/io/local_origin.h>
+#include <scan2lod/io/obj_writer.h>
+#include <scan2lod/io/ply_header.h>
+#include <scan2lod/io/used_vertices.h>
+#include <scan2lod/io/vtp_file.h>
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/IO/exporter/BaseExporter.hh>

@@ -16,7 +16,7 @@
 // takes such a file back to a local frame without rounding it to floats.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <cstddef>
 #include <string>

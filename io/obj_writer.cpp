@@ -1,7 +1,7 @@
-#include "io/obj_writer.h"
+#include <scan2lod/io/obj_writer.h>
 
-#include "core/error.h"
-#include "io/line_writer.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/line_writer.h>
 
 #include <cstdio>
 #include <memory>

@@ -4,7 +4,7 @@
 // second .mtl file, so colours would be lost from a single-file output.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <string>
 

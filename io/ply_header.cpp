@@ -1,6 +1,6 @@
-#include "io/ply_header.h"
+#include <scan2lod/io/ply_header.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <cctype>
 #include <fstream>

@@ -1,4 +1,4 @@
-#include "io/used_vertices.h"
+#include <scan2lod/io/used_vertices.h>
 
 namespace scan2lod {
 

@@ -4,7 +4,7 @@
 // has no use for such vertices, and tools count them as defects.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <optional>
 #include <vector>

@@ -1,6 +1,6 @@
-#include "io/vtp_file.h"
+#include <scan2lod/io/vtp_file.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <vtkCallbackCommand.h>
 #include <vtkCellArray.h>

@@ -4,7 +4,7 @@
 // commands run without it (cli/lean_main.cpp).
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <string>
 #include <vector>

@@ -1,6 +1,6 @@
-#include "lod/camera_frame.h"
+#include <scan2lod/lod/camera_frame.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <cstdio>
 

@@ -5,7 +5,7 @@
 // bad camera is refused by one rule with one message.
 #pragma once
 
-#include "lod/cluster_cut.h"
+#include <scan2lod/lod/clusters/cluster_cut.h>
 
 #include <string>
 

@@ -1,9 +1,9 @@
-#include "lod/level_chain.h"
+#include <scan2lod/lod/level_chain.h>
 
-#include "core/compact_mesh.h"
-#include "core/error.h"
-#include "core/mesh_edges.h"
-#include "lod/level_budget.h"
+#include <scan2lod/core/compact_mesh.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/mesh_edges.h>
+#include <scan2lod/lod/level_budget.h>
 
 #include <algorithm>
 #include <cmath>

@@ -12,8 +12,8 @@
 // bound, and its level's mean edge length over 4 stands in for one.
 #pragma once
 
-#include "core/types.h"
-#include "lod/lod_model.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/lod/lod_model.h>
 
 #include <string>
 #include <vector>

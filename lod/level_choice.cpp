@@ -1,7 +1,7 @@
-#include "lod/level_choice.h"
+#include <scan2lod/lod/level_choice.h>
 
-#include "core/error.h"
-#include "lod/camera_frame.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/lod/camera_frame.h>
 
 #include <cmath>
 #include <cstdio>

@@ -6,7 +6,7 @@
 // spells it ("--pixel-error" or "pixel_error").
 #pragma once
 
-#include "lod/lod_model.h"
+#include <scan2lod/lod/lod_model.h>
 
 #include <cstdint>
 #include <optional>

@@ -1,9 +1,9 @@
-#include "lod/lod_model.h"
+#include <scan2lod/lod/lod_model.h>
 
-#include "core/compact_mesh.h"
-#include "core/error.h"
-#include "lod/extract.h"
-#include "lod/paged_model.h"
+#include <scan2lod/core/compact_mesh.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/lod/clusters/paged_model.h>
+#include <scan2lod/lod/octree/extract.h>
 
 #include <algorithm>
 #include <chrono>

@@ -6,17 +6,17 @@
 // Structures:
 // - the prioritized marching-cube octree (Lee, *Efficient LOD Model
 //   Generation of 3D Objects using Prioritized Marching Cube Octree*, 2007):
-//   lod/mc_octree.h, lod/lod_array.h, lod/extract.h;
+//   lod/octree/mc_octree.h, lod/octree/lod_array.h, lod/octree/extract.h;
 // - the cluster hierarchy (Cignoni et al., *Batched Multi-Triangulation*,
-//   2005): lod/cluster_hierarchy.h, lod/cluster_cut.h.
+//   2005): lod/clusters/cluster_hierarchy.h, lod/clusters/cluster_cut.h.
 // A level of either is an index buffer into the model's vertices.
 #pragma once
 
-#include "core/types.h"
-#include "lod/cluster_cut.h"
-#include "lod/cluster_hierarchy.h"
-#include "lod/lod_array.h"
-#include "lod/mc_octree.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/lod/clusters/cluster_cut.h>
+#include <scan2lod/lod/clusters/cluster_hierarchy.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/mc_octree.h>
 
 #include <cstdint>
 #include <optional>

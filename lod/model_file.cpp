@@ -1,13 +1,13 @@
-#include "lod/model_file.h"
+#include <scan2lod/lod/model_file.h>
 
-#include "core/error.h"
-#include "io/atomic_file.h"
-#include "io/file_extension.h"
-#include "lod/model_pack.h"
-#include "lod/page_geometry.h"
-#include "lod/triangle_spool.h"
-#include "lod/transition.h"
-#include "reconstruct/cube_table.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/io/file_extension.h>
+#include <scan2lod/lod/clusters/page_geometry.h>
+#include <scan2lod/lod/clusters/triangle_spool.h>
+#include <scan2lod/lod/octree/model_pack.h>
+#include <scan2lod/lod/octree/transition.h>
+#include <scan2lod/reconstruct/cube_table.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -84,7 +84,7 @@ std::uint64_t get_u64(const std::uint8_t* p) {
 
 // What the sections hold besides the model's arrays as they lie in memory:
 // the records (the grid, the pinned count, the cluster hierarchy's info) and,
-// from format 4 on, the octree packed (lod/model_pack.h).
+// from format 4 on, the octree packed (lod/octree/model_pack.h).
 struct Records {
   std::uint8_t grid[kGridRecordBytes] = {};
   double origin[3] = {0, 0, 0};
@@ -196,7 +196,7 @@ const SectionSpec kSections[] = {
     // 4.4, optional: older readers read the clusters whole; this one derives the pages.
     {"PAGE", Part::kClusters, false, [](LodModel& m, Records&) { return array(m.clusters->pages); }, kPacked},
     // 4.6, optional: older readers, and load_model, read the clusters whole;
-    // a paged reader (lod/paged_model.h) reads a page's geometry at a time.
+    // a paged reader (lod/clusters/paged_model.h) reads a page's geometry at a time.
     {"PGIX", Part::kClusters, false, [](LodModel&, Records& r) { return array(r.page_extents); }, kPacked},
     {"PGEO", Part::kClusters, false, [](LodModel&, Records& r) { return streamed(r.page_bytes); }, kPacked},
 };
@@ -919,7 +919,7 @@ std::size_t Decoder::check_nodes(const McOctree& t) const {
 
 void Decoder::check_transitions(const McOctree& t, std::size_t internal) const {
   const std::size_t n = t.nodes.keys.size(), vertices = vertices_;
-  // Crack patching (lod/transition.h): the internal nodes come first, and
+  // Crack patching (lod/octree/transition.h): the internal nodes come first, and
   // every crossing the transition triangulation can join has a vertex.
   const std::size_t with_transitions = t.transitions.centre_vertices.size();
   if (with_transitions != internal)

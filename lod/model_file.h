@@ -43,7 +43,7 @@
 // pinned prefix; a 1.1 reader of a 1.0 file takes 0):
 //   PINC u64, one                          LodArray::pinned
 // Format 2.0 has 1.1's sections; what changed is how extraction triangulates a
-// transition with several loops (one loop around the centre, lod/transition.h),
+// transition with several loops (one loop around the centre, lod/octree/transition.h),
 // so a 1.x file's accumulation table no longer counts what extraction emits
 // and a reader rejects it.
 // Format 3.0 holds one or both LOD structures over one shared vertex array
@@ -57,7 +57,7 @@
 //   CTRI  i32[3] triangles, cluster by cluster
 //   CGRP  GroupBound records of 20 bytes: f32 centre[3], radius, error
 // A 2.x file (an octree alone) still loads.
-// Format 4.0 packs the octree (lod/model_pack.h) and derives at load time what
+// Format 4.0 packs the octree (lod/octree/model_pack.h) and derives at load time what
 // is cheap to derive; a 3.x file still loads, and 4.0 writes the same model.
 // KEYS, LEVL, PRNT, FCHD, NCHD, EDGV, FTRI, NTRI, SUBV, NBRS and TRIS are gone;
 // in their place, all required:
@@ -71,12 +71,12 @@
 // Neighbours are found again from the tree. On the bunny at R = 256 the file
 // went from 58.3 to 18.4 MB (the octree's part from 51.4 to 11.4 MB).
 // Added in 4.1, optional (a 4.0 reader skips it and offers levels inside the
-// coarsening's steps, lod/coarsening.h, which may be unsound; a 4.1 reader of
+// coarsening's steps, lod/octree/coarsening.h, which may be unsound; a 4.1 reader of
 // an older file offers every level past the pinned prefix):
 //   STEP i32, ascending        LodArray::inside_steps, priority numbers not offered
 // Added in 4.2, optional (a 4.1 reader skips it and may fan a transition loop
 // into a triangle of no area where a flat surface meets a node face in line,
-// lod/transition.h; a 4.2 reader of an older file takes all zero, as that
+// lod/octree/transition.h; a 4.2 reader of an older file takes all zero, as that
 // file's LODA was counted):
 //   STRF u8 per internal node  OctreeTransitions::straight_faces
 // Added in 4.3, optional (a 4.2 reader skips it and cuts the internal nodes'
@@ -85,9 +85,9 @@
 // does the same):
 //   OWNC u16 per triangle of the internal nodes, laid out as their triangles
 //                              the three edges whose vertices the triangle
-//                              joins, 4 bits each (lod/model_pack.h)
+//                              joins, 4 bits each (lod/octree/model_pack.h)
 // Added in 4.4, optional (a 4.3 reader skips it; a 4.4 reader of an older
-// file derives the pages, lod/cluster_hierarchy.h):
+// file derives the pages, lod/clusters/cluster_hierarchy.h):
 //   PAGE  ClusterPage records of 32 bytes: u32 first cluster, u32 cluster
 //         count, f32 centre[3], radius, min error, max error: runs of
 //         clusters whose triangles are one run of CTRI (64 KiB at most unless
@@ -102,10 +102,10 @@
 // Added in 4.6, optional, written when the hierarchy's pages lie in the order
 // of CTRI (a 4.5 reader, and load_model, skip them; a paged reader of an
 // older file reads it whole):
-//   PGIX  PageExtent records of 48 bytes, one a page (lod/page_geometry.h):
+//   PGIX  PageExtent records of 48 bytes, one a page (lod/clusters/page_geometry.h):
 //         where its geometry lies in PGEO, its checksum and box
 //   PGEO  bytes: each page's triangles over a vertex table of its own
-//         (lod/page_geometry.h), so that a viewer reads a page in one read
+//         (lod/clusters/page_geometry.h), so that a viewer reads a page in one read
 // Every section is listed once, in kSections (model_file.cpp), with the
 // formats that hold it: the writer and the reader both walk that table. A new
 // array is a new row there (and, if it must agree with others, a check in the
@@ -114,8 +114,8 @@
 // required and the major version goes up.
 #pragma once
 
-#include "lod/lod_model.h"
-#include "lod/page_geometry.h"
+#include <scan2lod/lod/clusters/page_geometry.h>
+#include <scan2lod/lod/lod_model.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -150,7 +150,7 @@ LodModel load_model(const std::string& path);
 std::vector<std::uint8_t> encode_model(const LodModel& model, std::uint32_t major = kModelFormatMajor);
 LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& source);
 
-// What reading a model page by page (lod/paged_model.h) starts from, read
+// What reading a model page by page (lod/clusters/paged_model.h) starts from, read
 // without the vertices, the triangles or the octree: the origin, the cluster
 // hierarchy's clusters, groups and pages (its triangles left empty), and
 // where each page's geometry lies in the file.

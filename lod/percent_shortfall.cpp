@@ -1,6 +1,6 @@
-#include "lod/percent_shortfall.h"
+#include <scan2lod/lod/percent_shortfall.h>
 
-#include "lod/level_budget.h"
+#include <scan2lod/lod/level_budget.h>
 
 #include <cmath>
 #include <cstdio>

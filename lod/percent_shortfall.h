@@ -3,7 +3,7 @@
 // UserWarning.
 #pragma once
 
-#include "lod/lod_model.h"
+#include <scan2lod/lod/lod_model.h>
 
 #include <string>
 

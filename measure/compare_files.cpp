@@ -1,7 +1,7 @@
-#include "measure/compare_files.h"
+#include <scan2lod/measure/compare_files.h>
 
-#include "core/error.h"
-#include "io/mesh_file.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
 
 namespace scan2lod {
 

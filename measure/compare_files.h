@@ -4,8 +4,8 @@
 // naming both files.
 #pragma once
 
-#include "core/types.h"
-#include "measure/surface_distance.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/measure/surface_distance.h>
 
 #include <string>
 

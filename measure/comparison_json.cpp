@@ -1,4 +1,4 @@
-#include "measure/comparison_json.h"
+#include <scan2lod/measure/comparison_json.h>
 
 namespace scan2lod {
 

@@ -7,7 +7,7 @@
 // with the topology's keys those of MeshTopology (measure/topology.h).
 #pragma once
 
-#include "measure/surface_distance.h"
+#include <scan2lod/measure/surface_distance.h>
 
 #include <nlohmann/json.hpp>
 

@@ -1,8 +1,8 @@
-#include "measure/surface_distance.h"
+#include <scan2lod/measure/surface_distance.h>
 
-#include "core/error.h"
-#include "core/point_triangle.h"
-#include "core/progress.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/point_triangle.h>
+#include <scan2lod/core/progress.h>
 
 #include <Eigen/Geometry>
 #include <open3d/core/Tensor.h>

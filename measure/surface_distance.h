@@ -9,8 +9,8 @@
 // keep their relative precision.
 #pragma once
 
-#include "core/types.h"
-#include "measure/topology.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/measure/topology.h>
 
 #include <cstddef>
 #include <cstdint>

@@ -1,7 +1,7 @@
-#include "measure/topology.h"
+#include <scan2lod/measure/topology.h>
 
-#include "core/error.h"
-#include "core/mesh_edges.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/mesh_edges.h>
 
 #include <Eigen/Geometry>
 

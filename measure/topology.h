@@ -10,7 +10,7 @@
 // counted in `degenerate_triangles` and otherwise ignored.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <cstddef>
 #include <vector>

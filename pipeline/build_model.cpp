@@ -1,17 +1,17 @@
-#include "pipeline/build_model.h"
+#include <scan2lod/pipeline/build_model.h>
 
-#include "core/error.h"
-#include "core/progress.h"
-#include "core/vertex_order.h"
-#include "distributed/message.h"
-#include "distributed/work_sharing.h"
-#include "io/mesh_file.h"
-#include "lod/lod_array.h"
-#include "lod/mc_octree.h"
-#include "lod/octree_order.h"
-#include "lod/triangle_spool.h"
-#include "pipeline/build_progress.h"
-#include "reconstruct/resolution_guard.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/core/vertex_order.h>
+#include <scan2lod/distributed/message.h>
+#include <scan2lod/distributed/work_sharing.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/clusters/triangle_spool.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/mc_octree.h>
+#include <scan2lod/lod/octree/octree_order.h>
+#include <scan2lod/pipeline/build_progress.h>
+#include <scan2lod/reconstruct/resolution_guard.h>
 
 #include <malloc.h>
 #include <sys/resource.h>

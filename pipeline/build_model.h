@@ -7,10 +7,10 @@
 // (reconstruct_in_bricks(), with a work folder to resume from).
 #pragma once
 
-#include "acquisition/load_inputs.h"
-#include "lod/lod_model.h"
-#include "reconstruct/brick_reconstruction.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/reconstruct/brick_reconstruction.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <memory>
 #include <string>

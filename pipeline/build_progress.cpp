@@ -1,4 +1,4 @@
-#include "pipeline/build_progress.h"
+#include <scan2lod/pipeline/build_progress.h>
 
 #include <algorithm>
 

@@ -5,7 +5,7 @@
 // bar with one ETA.
 #pragma once
 
-#include "core/progress.h"
+#include <scan2lod/core/progress.h>
 
 #include <map>
 #include <string>

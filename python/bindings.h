@@ -2,7 +2,7 @@
 // (module.cpp calls them in this order).
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <pybind11/pybind11.h>
 

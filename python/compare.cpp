@@ -1,10 +1,10 @@
 // compare(): two surfaces measured as `scan2lod compare --json` measures them
 // (measure/compare_files.h), the same JSON object as a dict.
-#include "measure/compare_files.h"
-#include "measure/comparison_json.h"
-#include "python/bindings.h"
-#include "python/errors.h"
-#include "python/progress.h"
+#include <scan2lod/measure/compare_files.h>
+#include <scan2lod/measure/comparison_json.h>
+#include <scan2lod/python/bindings.h>
+#include <scan2lod/python/errors.h>
+#include <scan2lod/python/progress.h>
 
 #include <pybind11/stl.h>
 

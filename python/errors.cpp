@@ -1,4 +1,4 @@
-#include "python/errors.h"
+#include <scan2lod/python/errors.h>
 
 #include <filesystem>
 

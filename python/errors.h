@@ -11,7 +11,7 @@
 // write paths catch it first with reading_files() and writing_file().
 #pragma once
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <pybind11/pybind11.h>
 

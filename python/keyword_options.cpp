@@ -1,6 +1,6 @@
-#include "python/keyword_options.h"
+#include <scan2lod/python/keyword_options.h>
 
-#include "reconstruct/signed_distance.h"
+#include <scan2lod/reconstruct/signed_distance.h>
 
 namespace scan2lod::python {
 namespace py = pybind11;

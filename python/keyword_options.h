@@ -8,7 +8,7 @@
 // keyword raises TypeError naming it, as Python does for a named parameter.
 #pragma once
 
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <pybind11/pybind11.h>
 

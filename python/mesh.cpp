@@ -1,10 +1,10 @@
 // Mesh: a TriangleMesh (core/types.h) whose arrays Python sees as numpy views
 // of the mesh's own vectors, and its files (io/mesh_file.h).
-#include "core/error.h"
-#include "io/mesh_file.h"
-#include "python/bindings.h"
-#include "python/errors.h"
-#include "python/numpy_arrays.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/python/bindings.h>
+#include <scan2lod/python/errors.h>
+#include <scan2lod/python/numpy_arrays.h>
 
 #include <pybind11/stl/filesystem.h>
 

@@ -1,17 +1,17 @@
 // Model: a LOD model (lod/lod_model.h) built, loaded, saved, and cut into
 // levels, as `scan2lod build`, `extract` and the .mco file hold them.
-#include "acquisition/mesh_points.h"
-#include "io/mesh_file.h"
-#include "lod/level_chain.h"
-#include "lod/level_choice.h"
-#include "lod/model_file.h"
-#include "lod/percent_shortfall.h"
-#include "pipeline/build_model.h"
-#include "python/bindings.h"
-#include "python/errors.h"
-#include "python/keyword_options.h"
-#include "python/points.h"
-#include "python/progress.h"
+#include <scan2lod/acquisition/mesh_points.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/level_chain.h>
+#include <scan2lod/lod/level_choice.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/percent_shortfall.h>
+#include <scan2lod/pipeline/build_model.h>
+#include <scan2lod/python/bindings.h>
+#include <scan2lod/python/errors.h>
+#include <scan2lod/python/keyword_options.h>
+#include <scan2lod/python/points.h>
+#include <scan2lod/python/progress.h>
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>

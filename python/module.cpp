@@ -1,7 +1,7 @@
 // The Python package's native module, scan2lod._scan2lod: the library's
 // faces for a Python user, arrays as numpy views (python/numpy_arrays.h).
-#include "python/bindings.h"
-#include "python/errors.h"
+#include <scan2lod/python/bindings.h>
+#include <scan2lod/python/errors.h>
 
 PYBIND11_MODULE(_scan2lod, m) {
   m.doc() = "scan2lod: range scans -> marching-cubes meshes -> level-of-detail models";

@@ -1,4 +1,4 @@
-#include "python/numpy_arrays.h"
+#include <scan2lod/python/numpy_arrays.h>
 
 namespace scan2lod::python {
 

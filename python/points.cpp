@@ -1,11 +1,11 @@
 // load_points(): what `scan2lod reconstruct` reads, as numpy arrays.
-#include "python/points.h"
+#include <scan2lod/python/points.h>
 
-#include "acquisition/load_inputs.h"
-#include "python/bindings.h"
-#include "python/errors.h"
-#include "python/numpy_arrays.h"
-#include "python/progress.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/python/bindings.h>
+#include <scan2lod/python/errors.h>
+#include <scan2lod/python/numpy_arrays.h>
+#include <scan2lod/python/progress.h>
 
 namespace scan2lod::python {
 namespace {

@@ -6,8 +6,8 @@
 // line's.
 #pragma once
 
-#include "acquisition/point_cloud_files.h"
-#include "core/types.h"
+#include <scan2lod/acquisition/point_cloud_files.h>
+#include <scan2lod/core/types.h>
 
 #include <pybind11/pybind11.h>
 

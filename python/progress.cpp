@@ -1,4 +1,4 @@
-#include "python/progress.h"
+#include <scan2lod/python/progress.h>
 
 namespace scan2lod::python {
 namespace py = pybind11;

@@ -8,7 +8,7 @@
 // uses every core already), whichever Python threads make them.
 #pragma once
 
-#include "core/progress.h"
+#include <scan2lod/core/progress.h>
 
 #include <pybind11/pybind11.h>
 

@@ -1,11 +1,11 @@
 // reconstruct(): oriented points -> marching-cubes mesh, as `scan2lod
 // reconstruct` makes it (reconstruct/marching_cubes.h), in core.
-#include "acquisition/cloud_normals.h"
-#include "python/bindings.h"
-#include "python/keyword_options.h"
-#include "python/points.h"
-#include "python/progress.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/cloud_normals.h>
+#include <scan2lod/python/bindings.h>
+#include <scan2lod/python/keyword_options.h>
+#include <scan2lod/python/points.h>
+#include <scan2lod/python/progress.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 namespace scan2lod::python {
 namespace {

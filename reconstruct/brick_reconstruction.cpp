@@ -1,20 +1,20 @@
-#include "reconstruct/brick_reconstruction.h"
+#include <scan2lod/reconstruct/brick_reconstruction.h>
 
-#include "core/compact_mesh.h"
-#include "core/error.h"
-#include "core/progress.h"
-#include "core/stopwatch.h"
-#include "distributed/message.h"
-#include "distributed/work_sharing.h"
-#include "io/atomic_file.h"
-#include "reconstruct/brick_surface.h"
-#include "reconstruct/cube_table.h"
-#include "reconstruct/hole_filling.h"
-#include "reconstruct/point_spool.h"
-#include "reconstruct/resolution_guard.h"
-#include "reconstruct/signed_distance.h"
-#include "reconstruct/welded_surface.h"
-#include "spatial/point_index.h"
+#include <scan2lod/core/compact_mesh.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/core/stopwatch.h>
+#include <scan2lod/distributed/message.h>
+#include <scan2lod/distributed/work_sharing.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/reconstruct/brick_surface.h>
+#include <scan2lod/reconstruct/cube_table.h>
+#include <scan2lod/reconstruct/hole_filling.h>
+#include <scan2lod/reconstruct/point_spool.h>
+#include <scan2lod/reconstruct/resolution_guard.h>
+#include <scan2lod/reconstruct/signed_distance.h>
+#include <scan2lod/reconstruct/welded_surface.h>
+#include <scan2lod/spatial/point_index.h>
 
 #include <fcntl.h>
 #include <omp.h>

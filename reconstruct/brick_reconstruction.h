@@ -20,8 +20,8 @@
 // single process computes, so the surface is the same whatever the ranks.
 #pragma once
 
-#include "reconstruct/marching_cubes.h"
-#include "reconstruct/point_spool.h"
+#include <scan2lod/reconstruct/marching_cubes.h>
+#include <scan2lod/reconstruct/point_spool.h>
 
 #include <functional>
 #include <string>

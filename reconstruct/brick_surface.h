@@ -5,8 +5,8 @@
 // lattice edge and leaves their cube, so bricks weld exactly.
 #pragma once
 
-#include "core/types.h"
-#include "reconstruct/cube_grid.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/reconstruct/cube_grid.h>
 
 #include <cstdint>
 #include <vector>

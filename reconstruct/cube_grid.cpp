@@ -1,6 +1,6 @@
-#include "reconstruct/cube_grid.h"
+#include <scan2lod/reconstruct/cube_grid.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 namespace scan2lod {
 

@@ -2,7 +2,7 @@
 // cube of the data (Lee 2007, §4.4), addressed sparsely by packed integer keys.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <cstdint>
 

@@ -1,4 +1,4 @@
-#include "reconstruct/cube_table.h"
+#include <scan2lod/reconstruct/cube_table.h>
 
 #include <Eigen/Core>
 

@@ -1,6 +1,6 @@
-#include "reconstruct/hole_filling.h"
+#include <scan2lod/reconstruct/hole_filling.h>
 
-#include "core/flat_hash.h"
+#include <scan2lod/core/flat_hash.h>
 
 #include <algorithm>
 #include <limits>

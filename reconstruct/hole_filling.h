@@ -5,7 +5,7 @@
 // (occluded creases in range scans); this closes it without new vertices.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <array>
 #include <vector>

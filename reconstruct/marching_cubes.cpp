@@ -1,16 +1,16 @@
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/reconstruct/marching_cubes.h>
 
-#include "core/error.h"
-#include "core/flat_hash.h"
-#include "core/union_find.h"
-#include "core/progress.h"
-#include "core/stopwatch.h"
-#include "reconstruct/brick_surface.h"
-#include "reconstruct/cube_table.h"
-#include "reconstruct/hole_filling.h"
-#include "reconstruct/open_loops.h"
-#include "reconstruct/resolution_guard.h"
-#include "spatial/point_index.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/flat_hash.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/core/stopwatch.h>
+#include <scan2lod/core/union_find.h>
+#include <scan2lod/reconstruct/brick_surface.h>
+#include <scan2lod/reconstruct/cube_table.h>
+#include <scan2lod/reconstruct/hole_filling.h>
+#include <scan2lod/reconstruct/open_loops.h>
+#include <scan2lod/reconstruct/resolution_guard.h>
+#include <scan2lod/spatial/point_index.h>
 
 #include <omp.h>
 

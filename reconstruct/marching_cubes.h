@@ -9,9 +9,9 @@
 // marching cubes cannot close get rim triangles (CubeNodes::patch_triangles).
 #pragma once
 
-#include "core/types.h"
-#include "reconstruct/cube_grid.h"
-#include "reconstruct/signed_distance.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/reconstruct/cube_grid.h>
+#include <scan2lod/reconstruct/signed_distance.h>
 
 #include <array>
 #include <cstdint>

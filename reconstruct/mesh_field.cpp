@@ -1,7 +1,7 @@
-#include "reconstruct/mesh_field.h"
+#include <scan2lod/reconstruct/mesh_field.h>
 
-#include "core/error.h"
-#include "core/mesh_edges.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/mesh_edges.h>
 
 #include <algorithm>
 #include <array>

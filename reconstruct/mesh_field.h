@@ -5,8 +5,8 @@
 // which it pulls vertices where the distance's sign flips beyond an open rim.
 #pragma once
 
-#include "core/types.h"
-#include "reconstruct/signed_distance.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/reconstruct/signed_distance.h>
 
 #include <functional>
 #include <vector>

@@ -3,8 +3,8 @@
 // bricks alike).
 #pragma once
 
-#include "core/flat_hash.h"
-#include "core/union_find.h"
+#include <scan2lod/core/flat_hash.h>
+#include <scan2lod/core/union_find.h>
 
 #include <cstdint>
 #include <vector>

@@ -1,7 +1,7 @@
-#include "reconstruct/point_spool.h"
+#include <scan2lod/reconstruct/point_spool.h>
 
-#include "core/error.h"
-#include "distributed/message.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/distributed/message.h>
 
 #include <xxhash.h>
 

@@ -5,7 +5,7 @@
 // way, and the records are read back a buffer at a time.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <cstdint>
 #include <cstdio>

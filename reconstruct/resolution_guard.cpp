@@ -1,7 +1,7 @@
-#include "reconstruct/resolution_guard.h"
+#include <scan2lod/reconstruct/resolution_guard.h>
 
-#include "core/error.h"
-#include "reconstruct/cube_grid.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/reconstruct/cube_grid.h>
 
 #include <omp.h>
 #include <unistd.h>

@@ -4,8 +4,8 @@
 // The area is read off the points' occupancy of a coarse grid.
 #pragma once
 
-#include "core/types.h"
-#include "reconstruct/cube_grid.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/reconstruct/cube_grid.h>
 
 #include <cstddef>
 #include <cstdint>

@@ -1,7 +1,7 @@
-#include "reconstruct/signed_distance.h"
+#include <scan2lod/reconstruct/signed_distance.h>
 
-#include "core/error.h"
-#include "spatial/point_index.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/spatial/point_index.h>
 
 #include <omp.h>
 

@@ -3,7 +3,7 @@
 // outside, negative inside.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <functional>
 #include <string>

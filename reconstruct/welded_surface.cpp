@@ -1,9 +1,9 @@
-#include "reconstruct/welded_surface.h"
+#include <scan2lod/reconstruct/welded_surface.h>
 
-#include "core/morton.h"
-#include "core/union_find.h"
-#include "reconstruct/cube_table.h"
-#include "reconstruct/open_loops.h"
+#include <scan2lod/core/morton.h>
+#include <scan2lod/core/union_find.h>
+#include <scan2lod/reconstruct/cube_table.h>
+#include <scan2lod/reconstruct/open_loops.h>
 
 #include <algorithm>
 #include <cmath>

@@ -10,9 +10,9 @@
 // 90 bytes a leaf.
 #pragma once
 
-#include "core/flat_hash.h"
-#include "core/types.h"
-#include "reconstruct/cube_grid.h"
+#include <scan2lod/core/flat_hash.h>
+#include <scan2lod/core/types.h>
+#include <scan2lod/reconstruct/cube_grid.h>
 
 #include <array>
 #include <cstdint>

@@ -1,6 +1,6 @@
-#include "spatial/point_index.h"
+#include <scan2lod/spatial/point_index.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <flann/flann.hpp>
 #include <omp.h>

@@ -3,7 +3,7 @@
 // distances (reconstruct/) and the octree's corner signs (lod/).
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <cstddef>
 #include <cstdint>

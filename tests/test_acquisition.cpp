@@ -1,13 +1,13 @@
 // Range images in (Lee 2007, §4.2-4.3): Stanford range grids, .conf poses,
 // organized clouds, lattice normals, and clear errors for bad input.
-#include "acquisition/lattice_normals.h"
-#include "acquisition/load_inputs.h"
-#include "acquisition/organized_pcd.h"
-#include "acquisition/range_grid_ply.h"
-#include "acquisition/scan_set.h"
-#include "core/error.h"
-#include "io/mesh_file.h"
-#include "measure/surface_distance.h"
+#include <scan2lod/acquisition/lattice_normals.h>
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/acquisition/organized_pcd.h>
+#include <scan2lod/acquisition/range_grid_ply.h>
+#include <scan2lod/acquisition/scan_set.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/measure/surface_distance.h>
 
 #include "test_support.h"
 

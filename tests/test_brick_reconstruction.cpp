@@ -3,12 +3,12 @@
 // whatever the brick size; its cluster cuts are as close; it resumes from the
 // bricks a build left, also after SIGKILL; and a budget below one brick is
 // refused with the minimum.
-#include "acquisition/load_inputs.h"
-#include "core/error.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "pipeline/build_model.h"
-#include "reconstruct/brick_reconstruction.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/pipeline/build_model.h>
+#include <scan2lod/reconstruct/brick_reconstruction.h>
 
 #include "test_shapes.h"
 #include "test_support.h"

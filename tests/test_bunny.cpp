@@ -1,10 +1,10 @@
 // The bunny's 10 real range scans at R = 256 against the zippered reference
 // surface bun_zipper.ply (issue 2's acceptance figures).
-#include "acquisition/load_inputs.h"
-#include "io/mesh_file.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <gtest/gtest.h>
 

@@ -3,11 +3,11 @@
 // line; and the reconstructed sphere and torus, closed 2-manifolds, do not
 // intersect themselves by Open3D's IsSelfIntersecting, which marching cubes'
 // needle triangles at corners on the surface used to fail.
-#include "acquisition/load_inputs.h"
-#include "io/mesh_file.h"
-#include "measure/topology.h"
-#include "reconstruct/cube_table.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/cube_table.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include "test_shapes.h"
 #include "test_support.h"

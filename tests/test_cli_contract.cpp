@@ -1,6 +1,6 @@
 // The command line's contract: --version, --quiet, --json, exit codes, and
 // the cases that must fail with a message, a documented code and no file.
-#include "io/mesh_file.h"
+#include <scan2lod/io/mesh_file.h>
 #include "test_support.h"
 
 #include <nlohmann/json.hpp>

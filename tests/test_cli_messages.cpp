@@ -2,9 +2,9 @@
 // "scan2lod: error: ..." with exit code 2, a level that misses its --percent
 // warned like one that misses its --triangles, degenerate cameras and flags
 // that would be ignored refused, and summaries that name what was written.
-#include "lod/level_budget.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
+#include <scan2lod/lod/level_budget.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
 #include "test_support.h"
 
 #include <nlohmann/json.hpp>

@@ -1,10 +1,10 @@
 // Closed shapes stay closed (Lee 2007, §4.4: range images generated from
 // meshes): a sphere and a torus, virtually scanned from 14 views, come back as
 // closed 2-manifolds with the right Euler characteristic, on the surface.
-#include "acquisition/lattice_normals.h"
-#include "acquisition/virtual_scanner.h"
-#include "measure/topology.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/lattice_normals.h>
+#include <scan2lod/acquisition/virtual_scanner.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include "test_shapes.h"
 

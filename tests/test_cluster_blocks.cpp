@@ -6,15 +6,15 @@
 // hold every cluster a cut draws, in core and in blocks.
 // The bunny's scans at R = 256 (about 280 k triangles) in blocks of 16 k:
 // 32 blocks in the first pass.
-#include "acquisition/load_inputs.h"
-#include "core/error.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
-#include "lod/triangle_spool.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "pipeline/build_model.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/lod/clusters/triangle_spool.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/pipeline/build_model.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 #include "test_support.h"
 
 #include <gtest/gtest.h>

@@ -3,10 +3,10 @@
 // cannot remove. Every cut of 1 k triangles or more is as sound as the full
 // mesh; below, handles may close but no piece is lost; and the coarsest cut
 // has at most kCoarsestTriangles.
-#include "lod/lod_model.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <gtest/gtest.h>
 

@@ -3,11 +3,11 @@
 // the full mesh, every view-dependent cut is watertight where the full mesh
 // is, and the generalized quadrics keep colours. Real scans (the bundled
 // bunny) and shapes with known answers (a scanned sphere).
-#include "acquisition/load_inputs.h"
-#include "lod/lod_model.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 #include "test_shapes.h"
 #include "test_support.h"
 

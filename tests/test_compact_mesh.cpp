@@ -1,6 +1,6 @@
 // Compacting an index buffer over a shared vertex array: once (compact_mesh)
 // or many times over one table (renumber_used).
-#include "core/compact_mesh.h"
+#include <scan2lod/core/compact_mesh.h>
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // glTF output: every file is checked by the Khronos glTF-Validator (npm
 // gltf-validator, installed by scripts/build.sh) and read back by tinygltf.
-#include "core/error.h"
-#include "io/gltf_file.h"
-#include "io/mesh_file.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/gltf_file.h>
+#include <scan2lod/io/mesh_file.h>
 #include "test_shapes.h"
 #include "test_support.h"
 

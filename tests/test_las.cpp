@@ -4,11 +4,11 @@
 // EVLRs skipped; georeferenced coordinates come back within the file's scale
 // once the local origin is added back; a terrain written as LAS reconstructs
 // onto its points; LAZ and broken files are refused naming what was expected.
-#include "acquisition/las_file.h"
-#include "acquisition/load_inputs.h"
-#include "core/error.h"
-#include "measure/surface_distance.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/las_file.h>
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include "test_las_file.h"
 #include "test_support.h"

@@ -3,7 +3,7 @@
 // extra bytes) and EVLRs, with junk in the fields the reader does not use.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <algorithm>
 #include <array>

@@ -6,13 +6,13 @@
 // within the file's 1 mm scale, read back by scan2lod and by Open3D; a model
 // (.mco) keeps the origin, so `extract` and `export` do the same. Outputs of
 // inputs without an origin are the bytes they were before.
-#include "acquisition/las_file.h"
-#include "acquisition/load_inputs.h"
-#include "core/error.h"
-#include "io/mesh_file.h"
-#include "lod/model_file.h"
-#include "measure/surface_distance.h"
-#include "pipeline/build_model.h"
+#include <scan2lod/acquisition/las_file.h>
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/pipeline/build_model.h>
 
 #include "test_las_file.h"
 #include "test_support.h"

@@ -1,14 +1,14 @@
 // Claims of Lee 2007 chapters 5-6 about the prioritized marching-cube octree.
-#include "acquisition/lattice_normals.h"
-#include "acquisition/load_inputs.h"
-#include "acquisition/virtual_scanner.h"
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/octree_order.h"
-#include "lod/mc_octree.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/lattice_normals.h>
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/acquisition/virtual_scanner.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/mc_octree.h>
+#include <scan2lod/lod/octree/octree_order.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include "test_shapes.h"
 #include "test_support.h"

@@ -1,10 +1,10 @@
 // The LOD commands (build, info, extract) through the real binary: the model
 // built from the bundled bunny reports its levels, extraction gives the mesh
 // sizes info promised, and bad input ends in a clear error and no file.
-#include "io/mesh_file.h"
-#include "lod/lod_array.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/octree/lod_array.h>
 
 #include "test_support.h"
 

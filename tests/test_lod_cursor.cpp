@@ -1,14 +1,14 @@
-// Incremental extraction (lod/lod_cursor.h, the idea of Ramos's LODStrips, 2008, on
+// Incremental extraction (lod/octree/lod_cursor.h, the idea of Ramos's LODStrips, 2008, on
 // Lee 2007's octree): moving between levels gives extract_lod's mesh and costs in
 // proportion to the expansions in between, not to the mesh.
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/octree_order.h"
-#include "lod/lod_cursor.h"
-#include "lod/lod_model.h"
-#include "lod/mc_octree.h"
-#include "lod/model_file.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/lod_cursor.h>
+#include <scan2lod/lod/octree/mc_octree.h>
+#include <scan2lod/lod/octree/octree_order.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include "test_shapes.h"
 #include "test_support.h"

@@ -1,13 +1,13 @@
 // Crack patching beyond the bunny: virtually scanned shapes with sharp edges,
 // near contact, higher genus and an open non-orientable strip keep the full
 // mesh's topology at every level issue 3's acceptance names.
-#include "acquisition/virtual_scanner.h"
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/octree_order.h"
-#include "lod/mc_octree.h"
-#include "measure/topology.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/virtual_scanner.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/mc_octree.h>
+#include <scan2lod/lod/octree/octree_order.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include "test_shapes.h"
 

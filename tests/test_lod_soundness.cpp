@@ -2,15 +2,15 @@
 // and every offered level is sound: no non-manifold edge, no more boundary
 // loops and no more connected components than the full mesh. Counted by
 // measure/topology.h, which shares no code with the checks the build makes.
-#include "acquisition/load_inputs.h"
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/octree_order.h"
-#include "lod/lod_cursor.h"
-#include "lod/lod_model.h"
-#include "lod/mc_octree.h"
-#include "measure/topology.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/lod_cursor.h>
+#include <scan2lod/lod/octree/mc_octree.h>
+#include <scan2lod/lod/octree/octree_order.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include "test_shapes.h"
 #include "test_support.h"

@@ -1,8 +1,8 @@
 // Claims about measure/: topology counts on shapes with known answers, and
 // distances that agree with an independent brute-force computation.
-#include "core/error.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
 
 #include <Eigen/Geometry>
 #include <open3d/geometry/TriangleMesh.h>

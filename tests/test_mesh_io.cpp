@@ -1,8 +1,8 @@
 // Mesh files: every format gives back what was written, and broken files give
 // an InputError that names the problem instead of a crash or a partial mesh.
-#include "acquisition/load_inputs.h"
-#include "core/error.h"
-#include "io/mesh_file.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
 
 #include "test_support.h"
 

@@ -3,17 +3,17 @@
 // triangles of every level of detail, and a truncated, damaged, newer, older
 // or crafted file ends in an InputError that says what is wrong, never in a
 // crash or an out-of-bounds read.
-#include "acquisition/load_inputs.h"
-#include "core/error.h"
-#include "io/mesh_file.h"
-#include "lod/extract.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
-#include "lod/octree_order.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "reconstruct/cube_table.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/octree_order.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/cube_table.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include "test_support.h"
 
@@ -884,7 +884,7 @@ TEST(ModelFile, Format5IsRefusedAsNewer) {
   EXPECT_NE(error_of(five.data(), 40).find("newer"), std::string::npos);
 }
 
-// Format 4 packs the octree (lod/model_pack.h) and derives the rest at load
+// Format 4 packs the octree (lod/octree/model_pack.h) and derives the rest at load
 // time: the same model as format 3 holds, in under a third of the bytes.
 TEST(ModelFile, Format4PacksTheOctreeAndHoldsTheSameModelAsFormat3) {
   const std::vector<std::uint8_t> three = encode_model(bunny64(), 3);

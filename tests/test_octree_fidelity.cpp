@@ -3,11 +3,11 @@
 // SimplifyVertexClustering, its voxel size searched for the count. Error:
 // the two-sided mean surface distance (measure/surface_distance.h), as
 // bench/lod reports it.
-#include "acquisition/load_inputs.h"
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/lod_cursor.h"
-#include "measure/surface_distance.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/lod_cursor.h>
+#include <scan2lod/measure/surface_distance.h>
 
 #include "test_shapes.h"
 
@@ -55,7 +55,7 @@ TriangleMesh vertex_clustering(const TriangleMesh& full, std::int64_t target) {
 // level is closer to the full mesh than vertex clustering's result. Measured
 // when written: 2.39 / 1.03 / 0.291 against 2.56 / 1.30 / 0.302 (1e-3 of the
 // diagonal). Before nodes held by the neighbour rule collapsed at their own
-// rank (lod/coarsening.cpp), the 2 k level was at 2.76, above it.
+// rank (lod/octree/coarsening.cpp), the 2 k level was at 2.76, above it.
 TEST(OctreeFidelity, CloserThanVertexClusteringAtTheCoarseEnd) {
   const std::string surface = std::string(SCAN2LOD_SHARED_DIR) + "/data/bunny/reconstruction/bun_zipper.ply";
   const auto b = scan2lod::testing::build_octree_model(load_oriented_points({surface}), 128);

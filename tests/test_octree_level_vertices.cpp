@@ -1,11 +1,11 @@
 // Each level above the leaves places its own copies of the crossings by the
-// mesh's tangent planes around them (lod/octree_level_vertices.cpp): a coarse
+// mesh's tangent planes around them (lod/octree/octree_level_vertices.cpp): a coarse
 // level straddles the surface instead of cutting under it as chords. Measured
 // on a sphere, whose distance is known exactly, and on the bunny.
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/mc_octree.h"
-#include "reconstruct/cube_table.h"
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/mc_octree.h>
+#include <scan2lod/reconstruct/cube_table.h>
 
 #include "test_shapes.h"
 

@@ -3,10 +3,10 @@
 // cubes took each flip for a crossing: flaps as large as the node, and a
 // shell closed behind the scan. Measured here with Open3D's own distance
 // query, not the build's field.
-#include "acquisition/load_inputs.h"
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/mc_octree.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/mc_octree.h>
 
 #include "test_shapes.h"
 

@@ -1,15 +1,15 @@
-// Reading a model page by page (lod/paged_model.h): every cut is the whole
+// Reading a model page by page (lod/clusters/paged_model.h): every cut is the whole
 // model's cut, byte for byte; the pages held never exceed the budget; a cut
 // reads only its own pages; a damaged page is named when it is read; and a
 // file without pages is left to load_model.
-#include "acquisition/load_inputs.h"
-#include "core/error.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
-#include "lod/page_geometry.h"
-#include "lod/paged_model.h"
-#include "lod/paged_view.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/lod/clusters/page_geometry.h>
+#include <scan2lod/lod/clusters/paged_model.h>
+#include <scan2lod/lod/clusters/paged_view.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include "test_support.h"
 

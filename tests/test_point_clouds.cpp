@@ -1,16 +1,16 @@
 // Point clouds in: vertex-only PLY, unorganized PCD and .xyz/.pts text, with
 // their normals or with normals estimated and oriented; range scans refused
 // without the .conf that registers them; and the resolution guard.
-#include "acquisition/cloud_normals.h"
-#include "acquisition/load_inputs.h"
-#include "acquisition/organized_pcd.h"
-#include "acquisition/point_cloud_files.h"
-#include "core/error.h"
-#include "io/mesh_file.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "reconstruct/marching_cubes.h"
-#include "reconstruct/resolution_guard.h"
+#include <scan2lod/acquisition/cloud_normals.h>
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/acquisition/organized_pcd.h>
+#include <scan2lod/acquisition/point_cloud_files.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
+#include <scan2lod/reconstruct/resolution_guard.h>
 
 #include "test_support.h"
 

@@ -2,8 +2,8 @@
 // so by compare, build and reconstruct), glTF as other tools write it, and
 // every mesh format `extract` writes by Open3D's reader, as users of Open3D
 // will read them.
-#include "core/error.h"
-#include "io/mesh_file.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
 #include "test_support.h"
 
 #define TINYGLTF_NO_STB_IMAGE

@@ -1,8 +1,8 @@
 // Claims of Lee 2007, §4.2 on shapes with known answers.
-#include "measure/topology.h"
-#include "reconstruct/cube_table.h"
-#include "reconstruct/hole_filling.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/cube_table.h>
+#include <scan2lod/reconstruct/hole_filling.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <gtest/gtest.h>
 

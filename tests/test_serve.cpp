@@ -3,8 +3,8 @@
 // folder, however the path is spelled. Requests are written by hand on a
 // socket, so that paths no client library would send reach the server as
 // they are.
-#include "core/error.h"
-#include "delivery/folder_server.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/delivery/folder_server.h>
 #include "test_support.h"
 
 #include <filesystem>

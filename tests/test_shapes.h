@@ -3,12 +3,12 @@
 // model of those points.
 #pragma once
 
-#include "acquisition/virtual_scanner.h"
-#include "core/types.h"
-#include "lod/lod_array.h"
-#include "lod/mc_octree.h"
-#include "lod/octree_order.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/virtual_scanner.h>
+#include <scan2lod/core/types.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/mc_octree.h>
+#include <scan2lod/lod/octree/octree_order.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <open3d/geometry/TriangleMesh.h>
 

@@ -2,11 +2,11 @@
 // on the bunny, checked by CesiumGS's 3D Tiles Validator (bundled in
 // ../shared/tools), every tile by the Khronos glTF-Validator, and against the
 // model's own cluster hierarchy.
-#include "delivery/tile_gaps.h"
-#include "delivery/tile_tree.h"
-#include "delivery/tileset.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
+#include <scan2lod/delivery/tile_gaps.h>
+#include <scan2lod/delivery/tile_tree.h>
+#include <scan2lod/delivery/tileset.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
 #include "test_support.h"
 
 #include <nlohmann/json.hpp>

@@ -1,7 +1,7 @@
-// Crack patching's transition triangulation (lod/transition.h) on hand-made
+// Crack patching's transition triangulation (lod/octree/transition.h) on hand-made
 // configurations whose answer is known.
-#include "lod/transition.h"
-#include "reconstruct/cube_table.h"
+#include <scan2lod/lod/octree/transition.h>
+#include <scan2lod/reconstruct/cube_table.h>
 
 #include <gtest/gtest.h>
 

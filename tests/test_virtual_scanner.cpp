@@ -1,10 +1,10 @@
 // Range data from meshes (Lee 2007, §4.3.1, §4.4, §6.3): mesh vertices as
 // oriented points, and virtual orthographic range scans of a known sphere.
-#include "acquisition/mesh_points.h"
-#include "acquisition/range_grid_ply.h"
-#include "acquisition/virtual_scanner.h"
-#include "core/error.h"
-#include "io/mesh_file.h"
+#include <scan2lod/acquisition/mesh_points.h>
+#include <scan2lod/acquisition/range_grid_ply.h>
+#include <scan2lod/acquisition/virtual_scanner.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/mesh_file.h>
 
 #include "test_support.h"
 

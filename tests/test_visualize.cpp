@@ -2,13 +2,13 @@
 // rendered off-screen (the tests run under xvfb-run), read back from the PNG,
 // and measured: how much of a panel the object covers, how dense the
 // wireframe's edges are, whether two renders agree to the pixel.
-#include "core/error.h"
-#include "lod/model_file.h"
-#include "visualize/levels.h"
-#include "visualize/montage.h"
-#include "visualize/octree_cells.h"
-#include "visualize/plots.h"
-#include "visualize/scene.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/visualize/levels.h>
+#include <scan2lod/visualize/montage.h>
+#include <scan2lod/visualize/octree_cells.h>
+#include <scan2lod/visualize/plots.h>
+#include <scan2lod/visualize/scene.h>
 
 #include "test_support.h"
 

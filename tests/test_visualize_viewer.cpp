@@ -3,12 +3,12 @@
 // InteractionEvents, key presses through the interactor), then through
 // `scan2lod view --script`. After each move the displayed triangle count must
 // be that of the level the extraction API gives for the slider's value.
-#include "lod/lod_array.h"
-#include "lod/model_file.h"
-#include "visualize/levels.h"
-#include "visualize/octree_cells.h"
-#include "visualize/scene.h"
-#include "visualize/viewer.h"
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/visualize/levels.h>
+#include <scan2lod/visualize/octree_cells.h>
+#include <scan2lod/visualize/scene.h>
+#include <scan2lod/visualize/viewer.h>
 
 #include "test_support.h"
 

@@ -1,6 +1,6 @@
-#include "visualize/levels.h"
+#include <scan2lod/visualize/levels.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <algorithm>
 #include <chrono>

@@ -5,9 +5,9 @@
 // for either structure of the model (the octree or the cluster hierarchy).
 #pragma once
 
-#include "core/types.h"
-#include "lod/lod_cursor.h"
-#include "lod/lod_model.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/octree/lod_cursor.h>
 
 #include <cstddef>
 #include <cstdint>

@@ -1,12 +1,12 @@
-#include "visualize/montage.h"
+#include <scan2lod/visualize/montage.h>
 
-#include "core/error.h"
-#include "core/mesh_edges.h"
-#include "core/progress.h"
-#include "visualize/levels.h"
-#include "visualize/png_output.h"
-#include "visualize/poly_data.h"
-#include "visualize/scene.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/mesh_edges.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/visualize/levels.h>
+#include <scan2lod/visualize/png_output.h>
+#include <scan2lod/visualize/poly_data.h>
+#include <scan2lod/visualize/scene.h>
 
 #include <vtkActor.h>
 #include <vtkCamera.h>

@@ -4,8 +4,8 @@
 // triangles and vertices.
 #pragma once
 
-#include "lod/lod_model.h"
-#include "visualize/scene.h"
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/visualize/scene.h>
 
 #include <cstddef>
 #include <optional>

@@ -1,6 +1,6 @@
-#include "visualize/octree_cells.h"
+#include <scan2lod/visualize/octree_cells.h>
 
-#include "reconstruct/cube_grid.h"
+#include <scan2lod/reconstruct/cube_grid.h>
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>

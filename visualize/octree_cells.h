@@ -6,7 +6,7 @@
 // for that reason.
 #pragma once
 
-#include "lod/lod_model.h"
+#include <scan2lod/lod/lod_model.h>
 
 #include <vtkSmartPointer.h>
 

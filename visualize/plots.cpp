@@ -1,11 +1,11 @@
-#include "visualize/plots.h"
+#include <scan2lod/visualize/plots.h>
 
-#include "core/error.h"
-#include "core/progress.h"
-#include "measure/surface_distance.h"
-#include "visualize/levels.h"
-#include "visualize/octree_cells.h"
-#include "visualize/png_output.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/visualize/levels.h>
+#include <scan2lod/visualize/octree_cells.h>
+#include <scan2lod/visualize/png_output.h>
 
 #include <vtkAxis.h>
 #include <vtkChartMatrix.h>

@@ -7,8 +7,8 @@
 // triangle count.
 #pragma once
 
-#include "core/types.h"
-#include "lod/lod_model.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/lod/lod_model.h>
 
 #include <cstddef>
 #include <cstdint>

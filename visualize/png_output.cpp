@@ -1,8 +1,8 @@
-#include "visualize/png_output.h"
+#include <scan2lod/visualize/png_output.h>
 
-#include "core/error.h"
-#include "io/atomic_file.h"
-#include "io/file_extension.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/io/atomic_file.h>
+#include <scan2lod/io/file_extension.h>
 
 #include <vtkNew.h>
 #include <vtkPNGWriter.h>

@@ -1,4 +1,4 @@
-#include "visualize/poly_data.h"
+#include <scan2lod/visualize/poly_data.h>
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>

@@ -2,7 +2,7 @@
 // the plots draw through these, the pipeline never sees a VTK type.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <vtkSmartPointer.h>
 

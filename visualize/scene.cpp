@@ -1,9 +1,9 @@
-#include "visualize/scene.h"
+#include <scan2lod/visualize/scene.h>
 
 #include <vtkCamera.h>
 #include <vtkProperty.h>
 
-#include "core/error.h"
+#include <scan2lod/core/error.h>
 
 #include <algorithm>
 #include <cmath>

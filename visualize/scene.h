@@ -2,7 +2,7 @@
 // wireframe surfaces, and number formatting for captions.
 #pragma once
 
-#include "core/types.h"
+#include <scan2lod/core/types.h>
 
 #include <cstddef>
 #include <string>

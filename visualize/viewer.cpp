@@ -1,19 +1,19 @@
-#include "visualize/viewer.h"
+#include <scan2lod/visualize/viewer.h>
 
-#include "acquisition/lattice_normals.h"
-#include "acquisition/scan_set.h"
-#include "core/error.h"
-#include "core/mesh_edges.h"
-#include "io/file_extension.h"
-#include "io/mesh_file.h"
-#include "lod/model_file.h"
-#include "lod/paged_model.h"
-#include "lod/paged_view.h"
-#include "visualize/levels.h"
-#include "visualize/octree_cells.h"
-#include "visualize/png_output.h"
-#include "visualize/poly_data.h"
-#include "visualize/scene.h"
+#include <scan2lod/acquisition/lattice_normals.h>
+#include <scan2lod/acquisition/scan_set.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/mesh_edges.h>
+#include <scan2lod/io/file_extension.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/clusters/paged_model.h>
+#include <scan2lod/lod/clusters/paged_view.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/visualize/levels.h>
+#include <scan2lod/visualize/octree_cells.h>
+#include <scan2lod/visualize/png_output.h>
+#include <scan2lod/visualize/poly_data.h>
+#include <scan2lod/visualize/scene.h>
 
 #include <vtkActor.h>
 #include <vtkCallbackCommand.h>

@@ -18,8 +18,8 @@
 // so the viewer can be driven without a human (tests, scripted screenshots).
 #pragma once
 
-#include "core/types.h"
-#include "lod/lod_model.h"
+#include <scan2lod/core/types.h>
+#include <scan2lod/lod/lod_model.h>
 
 #include <iosfwd>
 #include <memory>
@@ -47,7 +47,7 @@ struct ViewerInput {
 // scan set (a .conf, range-grid .ply files, organized .pcd files; several
 // files are one set). Throws InputError naming the file and what was expected.
 // With `cache_bytes`, a model with pages (format 4.6) is opened page by page
-// (lod/paged_model.h): the viewer then holds at most that many bytes of pages
+// (lod/clusters/paged_model.h): the viewer then holds at most that many bytes of pages
 // and starts on the camera cut.
 ViewerInput load_viewer_input(const std::vector<std::string>& inputs, std::uint64_t cache_bytes = 0);
 

@@ -1,4 +1,4 @@
-// Incremental extraction benchmark: LodCursor::move_to (lod/lod_cursor.h)
+// Incremental extraction benchmark: LodCursor::move_to (lod/octree/lod_cursor.h)
 // against extract_lod from scratch at the same target, for the moves a slider
 // makes, on the same model in the same run. What is reported is the ratio.
 //
@@ -25,15 +25,15 @@
 //   build/bin/scan2lod_bench_cursor [--model MODEL.mco | --input SCANS --resolution R]
 //                                   [--reps N] [--only TEXT] [--warm]
 
-#include "acquisition/load_inputs.h"
-#include "bench/bench_support.h"
-#include "bench/model_build.h"
-#include "core/progress.h"
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/lod_cursor.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/bench/bench_support.h>
+#include <scan2lod/bench/model_build.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/lod_cursor.h>
 
 #include <CLI/CLI.hpp>
 #include <omp.h>

@@ -36,7 +36,7 @@
 //      seconds at each level (goal >= 100), scan2lod error / peer error (goal:
 //      below 1 against every vertex-clustering peer, at most 1.5 against every
 //      quadric edge-collapse peer); and the report says which goals are met.
-//   6. The cluster hierarchy (lod/cluster_hierarchy.h), built in the same
+//   6. The cluster hierarchy (lod/clusters/cluster_hierarchy.h), built in the same
 //      model-build children (add_cluster_hierarchy over the reconstruction's
 //      mesh, as `scan2lod build` does) and read through the LOD face only
 //      (lod/lod_model.h: LevelExtractor, compact_level): the uniform cut at
@@ -61,22 +61,22 @@
 // Output: a markdown report on stdout (and, with --write, in
 // bench/lod/REPORT.md); progress on stderr.
 
-#include "acquisition/load_inputs.h"
-#include "bench/bench_support.h"
-#include "bench/library_meshes.h"
-#include "bench/model_build.h"
-#include "core/error.h"
-#include "core/progress.h"
-#include "core/types.h"
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/octree_order.h"
-#include "lod/lod_model.h"
-#include "lod/mc_octree.h"
-#include "lod/model_file.h"
-#include "measure/surface_distance.h"
-#include "measure/topology.h"
-#include "reconstruct/marching_cubes.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/bench/bench_support.h>
+#include <scan2lod/bench/library_meshes.h>
+#include <scan2lod/bench/model_build.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/core/types.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/mc_octree.h>
+#include <scan2lod/lod/octree/octree_order.h>
+#include <scan2lod/measure/surface_distance.h>
+#include <scan2lod/measure/topology.h>
+#include <scan2lod/reconstruct/marching_cubes.h>
 
 #include <CLI/CLI.hpp>
 // OpenMesh's properties grow by pushing a default VectorT, which leaves its
@@ -1061,7 +1061,7 @@ void report_clusters(Report& r, const RunInfo& info, const std::vector<ClusterLe
                      const std::vector<Peer>& peers) {
   r.add("## Cluster hierarchy beside the octree\n\n");
   r.add("The model's second structure (Cignoni et al., *Batched Multi-Triangulation*, 2005; "
-        "lod/cluster_hierarchy.h), read through the LOD face (`LevelExtractor`, `compact_level`): %zu clusters "
+        "lod/clusters/cluster_hierarchy.h), read through the LOD face (`LevelExtractor`, `compact_level`): %zu clusters "
         "in %d levels over %lld triangles at full detail%s. Budgets at or above the full count are left out.\n\n",
         info.clusters, info.cluster_levels, (long long)info.cluster_full,
         info.same_full ? ", the same triangles as the octree's full detail (the peers' full mesh)"

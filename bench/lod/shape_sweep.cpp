@@ -59,20 +59,20 @@
 //       [--expect-components C --expect-euler X] [--shared DIR]
 //   build/bin/scan2lod_bench_sweep --table RESULTS [--command TEXT] [--load-at-start TEXT]
 
-#include "acquisition/lattice_normals.h"
-#include "acquisition/load_inputs.h"
-#include "acquisition/range_grid_ply.h"
-#include "acquisition/virtual_scanner.h"
-#include "bench/bench_support.h"
-#include "bench/library_meshes.h"
-#include "bench/model_build.h"
-#include "core/progress.h"
-#include "io/mesh_file.h"
-#include "lod/extract.h"
-#include "lod/lod_array.h"
-#include "lod/lod_cursor.h"
-#include "lod/lod_model.h"
-#include "measure/topology.h"
+#include <scan2lod/acquisition/lattice_normals.h>
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/acquisition/range_grid_ply.h>
+#include <scan2lod/acquisition/virtual_scanner.h>
+#include <scan2lod/bench/bench_support.h>
+#include <scan2lod/bench/library_meshes.h>
+#include <scan2lod/bench/model_build.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_array.h>
+#include <scan2lod/lod/octree/lod_cursor.h>
+#include <scan2lod/measure/topology.h>
 
 #include <CLI/CLI.hpp>
 #include <omp.h>

@@ -2,11 +2,11 @@
 // level within BUDGET triangles from its default structure, writes it as
 // glTF, writes the model's 3D Tiles tileset into the folder TILES, and prints
 // "<structure> <triangles> <vertices> <tiles>".
-#include <core/error.h>
-#include <core/progress.h>
-#include <delivery/tileset.h>
-#include <io/gltf_file.h>
-#include <lod/model_file.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/delivery/tileset.h>
+#include <scan2lod/io/gltf_file.h>
+#include <scan2lod/lod/model_file.h>
 
 #include <cstdio>
 #include <cstdlib>

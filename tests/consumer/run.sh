@@ -12,7 +12,11 @@ source_dir="$(cd "$here/../.." && pwd)"
 rm -rf "$scratch"
 mkdir -p "$scratch"
 cmake --install "$build_dir" --prefix "$scratch/prefix" >/dev/null
-cmake -S "$here" -B "$scratch/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
+# Every installed header, included as an application would.
+(cd "$scratch/prefix/include" && find scan2lod -name '*.h' | sort | sed 's/.*/#include <&>/') > "$scratch/every_header.cpp"
+[ -s "$scratch/every_header.cpp" ] || { echo "no headers installed" >&2; exit 1; }
+cmake -S "$here" -B "$scratch/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" -DCMAKE_BUILD_TYPE=Release \
+  -DEVERY_HEADER="$scratch/every_header.cpp" >/dev/null
 cmake --build "$scratch/build" -j 2 >/dev/null
 if ldd "$scratch/build/consumer" | grep -E -i "libpcl|libvtk|libOpen3D"; then
   echo "the consumer links PCL, VTK or Open3D" >&2

@@ -45,9 +45,9 @@ cores="$(nproc)"
 if [[ "$target" == model ]]; then
   mkdir -p "$out/corpus"
   # lod_model.cpp (the face) builds hierarchies too: the cluster sources, METIS and meshoptimizer come along.
-  sources=(lod/model_file.cpp lod/model_pack.cpp lod/octree_keys.cpp lod/extract.cpp lod/transition.cpp
-           lod/lod_array.cpp lod/lod_cursor.cpp lod/lod_model.cpp lod/level_chain.cpp lod/cluster_cut.cpp lod/cluster_hierarchy.cpp lod/cluster_partition.cpp
-           lod/group_simplify.cpp core/mesh_edges.cpp core/compact_mesh.cpp core/large_array.cpp core/types.cpp reconstruct/cube_table.cpp io/atomic_file.cpp)
+  sources=(lod/model_file.cpp lod/octree/model_pack.cpp lod/octree/octree_keys.cpp lod/octree/extract.cpp lod/octree/transition.cpp
+           lod/octree/lod_array.cpp lod/octree/lod_cursor.cpp lod/lod_model.cpp lod/level_chain.cpp lod/clusters/cluster_cut.cpp lod/clusters/cluster_hierarchy.cpp lod/clusters/cluster_partition.cpp
+           lod/clusters/group_simplify.cpp core/mesh_edges.cpp core/compact_mesh.cpp core/large_array.cpp core/types.cpp reconstruct/cube_table.cpp io/atomic_file.cpp)
   clang++ -std=c++17 -O1 -g -fopenmp -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
     -I"$repo" -I/usr/include/eigen3 "$here/model_fuzzer.cpp" "${sources[@]/#/$repo/}" -lmetis -lmeshoptimizer -o "$out/model_fuzzer"
   seed="$out/seed16.mco"

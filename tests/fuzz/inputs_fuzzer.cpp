@@ -11,12 +11,12 @@
 //   3 .pcd  read_organized_pcd, then load_oriented_points
 //   4 .obj  5 .off  6 .stl  7 .vtp        read_mesh (+ load_oriented_points but .vtp)
 // INPUTS_FUZZ_VERBOSE=1 prints each InputError (to check seeds and reproducers).
-#include "acquisition/load_inputs.h"
-#include "acquisition/organized_pcd.h"
-#include "acquisition/range_grid_ply.h"
-#include "core/error.h"
-#include "core/progress.h"
-#include "io/mesh_file.h"
+#include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/acquisition/organized_pcd.h>
+#include <scan2lod/acquisition/range_grid_ply.h>
+#include <scan2lod/core/error.h>
+#include <scan2lod/core/progress.h>
+#include <scan2lod/io/mesh_file.h>
 
 #include <unistd.h>
 

@@ -6,8 +6,8 @@
 //
 // An input is the file's bytes. The reader takes a path, so they go to a file
 // in a per-process folder (in /dev/shm). LAS_FUZZ_VERBOSE=1 prints each InputError.
-#include "acquisition/las_file.h"
-#include "core/error.h"
+#include <scan2lod/acquisition/las_file.h>
+#include <scan2lod/core/error.h>
 
 #include <unistd.h>
 

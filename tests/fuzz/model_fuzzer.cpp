@@ -13,11 +13,11 @@
 //   the shared vertices or the cluster hierarchy's.
 // The seed model is $MODEL_FUZZ_SEED (a small .mco with both structures, e.g.
 // the bunny at R = 16 from scan2lod build, whose default is both).
-#include "core/error.h"
-#include "lod/extract.h"
-#include "lod/lod_cursor.h"
-#include "lod/lod_model.h"
-#include "lod/model_file.h"
+#include <scan2lod/core/error.h>
+#include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/lod_cursor.h>
 
 #include <algorithm>
 #include <cmath>

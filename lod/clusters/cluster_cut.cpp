@@ -1,0 +1,112 @@
+#include <scan2lod/lod/clusters/cluster_cut.h>
+
+#include <scan2lod/lod/clusters/paged_model.h>
+#include <scan2lod/lod/level_budget.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <cmath>
+#include <limits>
+
+namespace scan2lod {
+
+void select_clusters_by_error(const ClusterHierarchy& h, float error, std::vector<std::int32_t>* selected) {
+  selected->clear();
+  const GroupBound* groups = h.groups.data();
+  const std::size_t n = h.clusters.size();
+  for (std::size_t c = 0; c < n; ++c) {
+    const Cluster& cl = h.clusters[c];
+    const bool own_applied = cl.own_group < 0 || groups[cl.own_group].error <= error;
+    const bool parent_applied = cl.parent_group >= 0 && groups[cl.parent_group].error <= error;
+    if (own_applied && !parent_applied) selected->push_back(std::int32_t(c));
+  }
+}
+
+void select_clusters_for_view(const ClusterHierarchy& h, const CameraView& camera, float pixel_error,
+                              std::vector<float>* projected, std::vector<std::int32_t>* selected) {
+  const float half_fov = 0.5f * camera.fov_degrees * float(M_PI) / 180.f;
+  const float pixels_per_unit_at_unit_distance = float(camera.height) / (2.f * std::tan(half_fov));
+  const std::size_t groups = h.groups.size();
+  projected->resize(groups);
+  float* p = projected->data();
+  const float ex = camera.eye.x(), ey = camera.eye.y(), ez = camera.eye.z();
+  for (std::size_t g = 0; g < groups; ++g) {
+    const GroupBound& b = h.groups[g];
+    const float dx = b.center[0] - ex, dy = b.center[1] - ey, dz = b.center[2] - ez;
+    const float distance = std::sqrt(dx * dx + dy * dy + dz * dz) - b.radius;
+    p[g] = distance > 0 ? b.error * pixels_per_unit_at_unit_distance / distance
+                        : std::numeric_limits<float>::infinity();
+  }
+  selected->clear();
+  const std::size_t n = h.clusters.size();
+  for (std::size_t c = 0; c < n; ++c) {
+    const Cluster& cl = h.clusters[c];
+    const bool own_applied = cl.own_group < 0 || p[cl.own_group] <= pixel_error;
+    const bool parent_applied = cl.parent_group >= 0 && p[cl.parent_group] <= pixel_error;
+    if (own_applied && !parent_applied) selected->push_back(std::int32_t(c));
+  }
+}
+
+ClusterCutTable cluster_cut_table(const ClusterHierarchy& h) {
+  // Applying a group swaps the clusters it consumed for the ones it made.
+  std::vector<std::int64_t> change(h.groups.size(), 0);
+  for (const Cluster& c : h.clusters) {
+    if (c.own_group >= 0) change[std::size_t(c.own_group)] += c.triangle_count;
+    if (c.parent_group >= 0) change[std::size_t(c.parent_group)] -= c.triangle_count;
+  }
+  std::vector<std::int32_t> order(h.groups.size());
+  for (std::size_t g = 0; g < order.size(); ++g) order[g] = std::int32_t(g);
+  std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+    return h.groups[std::size_t(a)].error < h.groups[std::size_t(b)].error;
+  });
+  ClusterCutTable table;
+  table.errors.push_back(0);
+  table.triangles.push_back(h.full_triangles);
+  std::int64_t count = h.full_triangles;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    count += change[std::size_t(order[i])];
+    const float e = h.groups[std::size_t(order[i])].error;
+    if (i + 1 < order.size() && h.groups[std::size_t(order[i + 1])].error == e) continue;
+    table.errors.push_back(e);
+    table.triangles.push_back(count);
+  }
+  return table;
+}
+
+float error_for_triangles(const ClusterCutTable& table, std::int64_t budget) {
+  // triangles never rise along the table: the first entry within budget.
+  const auto it = std::partition_point(table.triangles.begin(), table.triangles.end(),
+                                       [&](std::int64_t t) { return t > budget; });
+  if (it == table.triangles.end()) return table.errors.back();
+  return table.errors[std::size_t(it - table.triangles.begin())];
+}
+
+float error_for_budget(const ClusterCutTable& table, std::int64_t budget) {
+  const auto it = std::partition_point(table.triangles.begin(), table.triangles.end(),
+                                       [&](std::int64_t t) { return t > budget; });
+  const std::size_t i = std::size_t(it - table.triangles.begin());
+  const std::int64_t under = i < table.triangles.size() ? table.triangles[i] : -1;
+  const std::int64_t over = i > 0 ? table.triangles[i - 1] : -1;  // the fewest triangles above the budget
+  if (take_level_over(under, over, budget)) return table.errors[i - 1];
+  return i < table.triangles.size() ? table.errors[i] : table.errors.back();
+}
+
+void emit_clusters(const ClusterHierarchy& h, const std::vector<std::int32_t>& selected,
+                   std::vector<Triangle>* triangles) {
+  if (h.spool)
+    throw std::logic_error("emit_clusters: the hierarchy's triangles are spooled on disk; save the model, or "
+                           "load_spooled(), first");
+  if (h.paged) return h.paged->emit(h, selected, triangles);
+  std::size_t total = triangles->size();
+  for (std::int32_t c : selected) total += h.clusters[std::size_t(c)].triangle_count;
+  triangles->reserve(total);
+  // Ranges appended as they are: no zero-filling first, no work per triangle.
+  for (std::int32_t c : selected) {
+    const Cluster& cl = h.clusters[std::size_t(c)];
+    if (cl.triangle_count == 0) continue;  // no range to copy (and no pointer to copy from)
+    const Triangle* first = h.triangles.data() + cl.first_triangle;
+    triangles->insert(triangles->end(), first, first + cl.triangle_count);
+  }
+}
+
+}  // namespace scan2lod

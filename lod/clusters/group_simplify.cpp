@@ -1,0 +1,599 @@
+#include <scan2lod/lod/clusters/group_simplify.h>
+
+#include <scan2lod/core/point_triangle.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <queue>
+
+namespace scan2lod {
+namespace {
+
+constexpr int kMaxDim = 9;                   // position, normal, colour
+constexpr int kUpper = kMaxDim * (kMaxDim + 1) / 2;
+// A pivot below this share of the largest diagonal entry is a direction the
+// quadric does not constrain.
+constexpr double kSingular = 1e-9;
+// Boundary constraint planes weigh this much per unit of squared edge length,
+// against the faces' area: a real boundary then moves along itself, not inwards.
+constexpr double kBoundaryWeight = 4.0;
+
+// x^T A x + 2 b^T x + c over the first `dim` coordinates, packed for that
+// dimension: A's upper triangle row by row, then b, then c. Sums of squared
+// distances to planes in R^dim. (Packed, a 6-dimensional quadric is 28
+// doubles, not the 55 of the largest: adding them was a tenth of the
+// instructions of a whole-mesh build.)
+struct Quadric {
+  std::array<double, kUpper + kMaxDim + 1> v{};
+
+  static int upper(int dim) { return dim * (dim + 1) / 2; }
+  static int row(int i, int dim) { return i * dim - i * (i - 1) / 2; }  // where A's row i starts
+  void add(const Quadric& o, int dim) {
+    const int n = upper(dim) + dim + 1;
+    for (int i = 0; i < n; ++i) v[std::size_t(i)] += o.v[std::size_t(i)];
+  }
+  double evaluate(const double* x, int dim) const {
+    const int n = upper(dim);
+    double e = v[std::size_t(n + dim)];
+    int k = 0;
+    for (int i = 0; i < dim; ++i) {
+      double r = v[std::size_t(k++)] * x[i];
+      for (int j = i + 1; j < dim; ++j) r += 2 * v[std::size_t(k++)] * x[j];
+      e += x[i] * r + 2 * v[std::size_t(n + i)] * x[i];
+    }
+    return e;
+  }
+  // Adds w * (I - sum e e^T) for the orthonormal `basis` of a plane through
+  // q, over the first `plane_dim` of the quadric's `dim` coordinates.
+  void add_plane(const double* q, const double (*basis)[kMaxDim], int basis_size, int plane_dim, int dim, double w) {
+    const int n = upper(dim);
+    double qe[2] = {0, 0};
+    for (int s = 0; s < basis_size; ++s)
+      for (int i = 0; i < plane_dim; ++i) qe[s] += q[i] * basis[s][i];
+    for (int i = 0; i < plane_dim; ++i) {
+      int k = row(i, dim);
+      for (int j = i; j < plane_dim; ++j) {
+        double a = i == j ? 1.0 : 0.0;
+        for (int s = 0; s < basis_size; ++s) a -= basis[s][i] * basis[s][j];
+        v[std::size_t(k++)] += w * a;
+      }
+      double bi = -q[i];
+      for (int s = 0; s < basis_size; ++s) bi += qe[s] * basis[s][i];
+      v[std::size_t(n + i)] += w * bi;
+    }
+    double qq = 0;
+    for (int i = 0; i < plane_dim; ++i) qq += q[i] * q[i];
+    for (int s = 0; s < basis_size; ++s) qq -= qe[s] * qe[s];
+    v[std::size_t(n + dim)] += w * qq;
+  }
+};
+
+// Where p + q is least (A x = -b), into `out`, with the value there; false
+// where A is near singular (a flat or straight neighbourhood, where any
+// point along it is as good and the solve would wander). LDL^T by hand and
+// of a fixed size: Eigen's with its condition estimate took half the
+// hierarchy's build, and a loop over the dimension a quarter.
+template <int D>
+bool sum_minimum(const Quadric& p, const Quadric& q, double* out, double* value) {
+  double m[D][D], y[D];
+  double largest = 0;
+  constexpr int n = D * (D + 1) / 2;  // where b starts
+  for (int i = 0; i < D; ++i) {
+    const int row = Quadric::row(i, D);
+    for (int j = i; j < D; ++j) m[j][i] = p.v[std::size_t(row + j - i)] + q.v[std::size_t(row + j - i)];
+    largest = std::max(largest, std::abs(m[i][i]));
+  }
+  if (!(largest > 0)) return false;
+  for (int j = 0; j < D; ++j) {  // lower triangle: L below, D on the diagonal
+    double ld[D];                 // row j of L times D, taken once for the column
+    double d = m[j][j];
+    for (int k = 0; k < j; ++k) ld[k] = m[j][k] * m[k][k], d -= m[j][k] * ld[k];
+    if (!(d > kSingular * largest)) return false;
+    m[j][j] = d;
+    const double inverse = 1 / d;
+    for (int i = j + 1; i < D; ++i) {
+      double v = m[i][j];
+      for (int k = 0; k < j; ++k) v -= m[i][k] * ld[k];
+      m[i][j] = v * inverse;
+    }
+  }
+  for (int i = 0; i < D; ++i) {
+    double v = -(p.v[std::size_t(n + i)] + q.v[std::size_t(n + i)]);
+    for (int k = 0; k < i; ++k) v -= m[i][k] * y[k];
+    y[i] = v;
+  }
+  for (int i = 0; i < D; ++i) y[i] /= m[i][i];
+  double at = p.v[std::size_t(n + D)] + q.v[std::size_t(n + D)];  // x^T A x + 2 b^T x + c where A x = -b
+  for (int i = D - 1; i >= 0; --i) {
+    double v = y[i];
+    for (int k = i + 1; k < D; ++k) v -= m[k][i] * out[k];
+    if (!std::isfinite(v)) return false;
+    out[i] = v;
+  }
+  for (int i = 0; i < D; ++i) at += (p.v[std::size_t(n + i)] + q.v[std::size_t(n + i)]) * out[i];
+  *value = at;
+  return true;
+}
+
+bool sum_minimum(int dim, const Quadric& p, const Quadric& q, double* out, double* value) {
+  switch (dim) {
+    case 3: return sum_minimum<3>(p, q, out, value);
+    case 6: return sum_minimum<6>(p, q, out, value);
+    case 9: return sum_minimum<9>(p, q, out, value);
+    default: return false;  // no other dimension is built
+  }
+}
+
+struct GroupQuadrics {
+  int dim = 3;
+  double scale = 1;                            // x's positions over the stored ones
+  std::vector<std::array<double, kMaxDim>> x;  // each vertex's point in R^dim
+  std::vector<Quadric> full;                   // position + attributes
+};
+
+// Orthonormal basis of the plane through p0, p1, p2 in R^dim (Gram-Schmidt);
+// false for a degenerate triangle.
+bool triangle_basis(const double* p0, const double* p1, const double* p2, int dim, double (*e)[kMaxDim]) {
+  double n1 = 0, d = 0, n2 = 0;
+  for (int i = 0; i < dim; ++i) e[0][i] = p1[i] - p0[i], n1 += e[0][i] * e[0][i];
+  if (!(n1 > 1e-30)) return false;
+  n1 = std::sqrt(n1);
+  for (int i = 0; i < dim; ++i) e[0][i] /= n1;
+  for (int i = 0; i < dim; ++i) d += (p2[i] - p0[i]) * e[0][i];
+  for (int i = 0; i < dim; ++i) e[1][i] = p2[i] - p0[i] - d * e[0][i], n2 += e[1][i] * e[1][i];
+  if (!(n2 > 1e-30)) return false;
+  n2 = std::sqrt(n2);
+  for (int i = 0; i < dim; ++i) e[1][i] /= n2;
+  return true;
+}
+
+
+// The group in local indices, with each vertex's triangles.
+struct GroupTopology {
+  std::vector<std::array<int, 3>> tris;
+  std::vector<std::uint8_t> dead;           // per triangle
+  std::vector<std::vector<int>> incident;   // per vertex: its live triangles (and some dead ones)
+  std::vector<std::uint8_t> locked, border; // per vertex
+  std::vector<std::uint8_t> mark;           // scratch per vertex
+};
+
+int other_count(const GroupTopology& g, int t, int a, int b) {
+  const auto& x = g.tris[std::size_t(t)];
+  return (x[0] == a || x[1] == a || x[2] == a) && (x[0] == b || x[1] == b || x[2] == b);
+}
+
+// Phase: classify. An edge used once is on a border (the scan's real boundary,
+// since group borders are locked anyway); used more than twice, or a vertex
+// whose border is not one simple chain, is complex and stays where it is.
+void classify(GroupTopology* g) {
+  std::vector<std::pair<std::uint64_t, int>> edges;
+  for (std::size_t t = 0; t < g->tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t a = std::uint32_t(g->tris[t][std::size_t(k)]), b = std::uint32_t(g->tris[t][std::size_t((k + 1) % 3)]);
+      const bool forward = a < b;
+      if (!forward) std::swap(a, b);
+      edges.push_back({std::uint64_t(a) << 32 | b, forward ? 1 : -1});
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<int> border_edges(g->incident.size(), 0);
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    int orientation = 0;
+    while (j < edges.size() && edges[j].first == edges[i].first) orientation += edges[j].second, ++j;
+    const int a = int(edges[i].first >> 32), b = int(edges[i].first & 0xffffffffu);
+    if (j - i == 1) {
+      ++border_edges[std::size_t(a)], ++border_edges[std::size_t(b)];
+    } else if (j - i > 2 || orientation != 0) {
+      g->locked[std::size_t(a)] = g->locked[std::size_t(b)] = 1;  // non-manifold or flipped neighbours
+    }
+    i = j;
+  }
+  for (std::size_t v = 0; v < g->incident.size(); ++v) {
+    if (border_edges[v] > 2) g->locked[v] = 1;  // two border chains meet here
+    g->border[v] = border_edges[v] > 0;
+  }
+}
+
+struct Candidate {
+  float cost;
+  int from, to;
+  int meeting;  // its slot in the meetings computed at push
+  bool operator>(const Candidate& o) const { return cost > o.cost; }
+};
+
+// Phase: may `from` and `to` merge into one vertex at `target`? Border
+// vertices only slide along their border; the edge's link must be its one or
+// two opposite vertices (no fold into a non-manifold); no triangle may turn
+// over or collapse; and no new edge may join two locked vertices, which a
+// neighbouring group might join too.
+bool collapse_allowed(GroupTopology* g, int from, int to, const Eigen::Vector3d& target,
+                      const std::vector<std::array<double, kMaxDim>>& x, double scale) {
+  if (g->locked[std::size_t(from)]) return false;
+  int shared = 0;
+  for (int t : g->incident[std::size_t(from)])
+    if (!g->dead[std::size_t(t)] && other_count(*g, t, from, to)) ++shared;
+  if (shared == 0) return false;
+  if (g->border[std::size_t(from)] && !(g->border[std::size_t(to)] && shared == 1)) return false;
+
+  // Link condition: the vertices next to both are exactly the opposite ones.
+  for (int t : g->incident[std::size_t(to)])
+    if (!g->dead[std::size_t(t)])
+      for (int v : g->tris[std::size_t(t)]) g->mark[std::size_t(v)] = 1;
+  int common = 0;
+  bool locked_edge = false;
+  for (int t : g->incident[std::size_t(from)]) {
+    if (g->dead[std::size_t(t)]) continue;
+    for (int v : g->tris[std::size_t(t)]) {
+      if (v == from || v == to) continue;
+      if (g->mark[std::size_t(v)] == 1) g->mark[std::size_t(v)] = 2, ++common;
+      else if (g->mark[std::size_t(v)] == 0 && g->locked[std::size_t(v)] && g->locked[std::size_t(to)]) locked_edge = true;
+    }
+  }
+  for (int t : g->incident[std::size_t(to)])
+    if (!g->dead[std::size_t(t)])
+      for (int v : g->tris[std::size_t(t)]) g->mark[std::size_t(v)] = 0;
+  if (common != shared || locked_edge) return false;
+
+  // Each triangle the collapse removes keeps its third vertex tied to the
+  // kept one through another triangle. Where it is the only tie (a triangle
+  // hanging on the border by one corner) the collapse would cut a piece off:
+  // on scans with open boundaries that left pieces of 1-3 triangles.
+  for (int t : g->incident[std::size_t(from)]) {
+    if (g->dead[std::size_t(t)] || !other_count(*g, t, from, to)) continue;
+    for (int w : g->tris[std::size_t(t)]) {
+      if (w == from || w == to) continue;
+      bool tied = false;
+      for (int u : g->incident[std::size_t(w)]) {
+        if (g->dead[std::size_t(u)] || other_count(*g, u, from, to)) continue;
+        const auto& x = g->tris[std::size_t(u)];
+        tied |= x[0] == from || x[1] == from || x[2] == from || x[0] == to || x[1] == to || x[2] == to;
+      }
+      if (!tied) return false;
+    }
+  }
+
+  // No triangle around either turns over or becomes a sliver.
+  for (const int end : {from, to})
+  for (int t : g->incident[std::size_t(end)]) {
+    if (g->dead[std::size_t(t)] || other_count(*g, t, from, to)) continue;
+    const auto& tri = g->tris[std::size_t(t)];
+    Eigen::Vector3d p[3], q[3];
+    for (int k = 0; k < 3; ++k) {
+      const auto& xv = x[std::size_t(tri[std::size_t(k)])];
+      p[k] = Eigen::Vector3d(xv[0], xv[1], xv[2]);
+      q[k] = tri[std::size_t(k)] == from || tri[std::size_t(k)] == to ? target : p[k];
+    }
+    const Eigen::Vector3d before = (p[1] - p[0]).cross(p[2] - p[0]), after = (q[1] - q[0]).cross(q[2] - q[0]);
+    const double a = after.norm();
+    // In line as the stored float positions have it: a vertex placed a hair
+    // off a box's flat face rounds back onto it, in line with two others.
+    const auto stored = [&](const Eigen::Vector3d& v) { return Vec3f((v / scale).cast<float>()); };
+    if (!(a > 0) || in_line(stored(q[0]), stored(q[1]), stored(q[2])) ||
+        after.dot(before) < 0.2 * before.norm() * a)
+      return false;
+  }
+  return true;
+}
+
+// Phase: the group's error, measured: how far each vertex that went or
+// moved lies, where it was, from the triangles around the vertex that stands
+// for it now (a one-sided Hausdorff distance over the group's vertices, in
+// scaled units).
+double removed_vertex_distance(GroupTopology& g, std::vector<int>& moved_to, const std::vector<std::uint8_t>& moved,
+                               const std::vector<std::array<double, kMaxDim>>& origin,
+                               const std::vector<std::array<double, kMaxDim>>& x) {
+  auto point = [&](int v) { return Eigen::Vector3d(x[std::size_t(v)][0], x[std::size_t(v)][1], x[std::size_t(v)][2]); };
+  double worst = 0;
+  for (std::size_t r = 0; r < moved_to.size(); ++r) {
+    if (moved_to[r] < 0 && !moved[r]) continue;
+    int rep = int(r);
+    while (moved_to[std::size_t(rep)] >= 0) rep = moved_to[std::size_t(rep)];
+    if (moved_to[r] >= 0) moved_to[r] = rep;  // shortens the chain for the next ones
+    const Eigen::Vector3d p(origin[r][0], origin[r][1], origin[r][2]);
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int t : g.incident[std::size_t(rep)]) {
+      if (g.dead[std::size_t(t)]) continue;
+      const auto& tri = g.tris[std::size_t(t)];
+      nearest = std::min(nearest, std::sqrt(point_triangle_distance2(p, point(tri[0]), point(tri[1]), point(tri[2]))));
+    }
+    if (std::isfinite(nearest)) worst = std::max(worst, nearest);
+  }
+  return worst;
+}
+
+}  // namespace
+
+std::vector<int>& group_local_index(std::size_t vertices) {
+  thread_local std::vector<int> map;
+  if (map.size() < vertices) map.assign(vertices, -1);
+  return map;
+}
+
+// Phase 1: the group's triangles in local indices, with their incidence and
+// which vertices are locked or on the border. Returns local -> global.
+std::vector<std::int32_t> load_group(const std::vector<Triangle>& triangles, const SimplifyInput& in,
+                                     std::vector<int>& local, GroupTopology* group) {
+  GroupTopology& g = *group;
+  g.tris.clear();
+  std::vector<std::int32_t> global;
+  for (const Triangle& t : triangles) {
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+    std::array<int, 3> l;
+    for (int k = 0; k < 3; ++k) {
+      int& i = local[std::size_t(t[std::size_t(k)])];
+      if (i < 0) i = int(global.size()), global.push_back(t[std::size_t(k)]);
+      l[std::size_t(k)] = i;
+    }
+    g.tris.push_back(l);
+  }
+  const std::size_t nv = global.size();
+  g.dead.assign(g.tris.size(), 0);
+  if (g.incident.size() < nv) g.incident.resize(nv);
+  for (std::size_t v = 0; v < nv; ++v) g.incident[v].clear();
+  for (std::size_t t = 0; t < g.tris.size(); ++t)
+    for (int v : g.tris[t]) g.incident[std::size_t(v)].push_back(int(t));
+  g.locked.assign(nv, 0);
+  g.border.assign(nv, 0);
+  g.mark.assign(nv, 0);
+  for (std::size_t v = 0; v < nv; ++v) g.locked[v] = (*in.locked)[std::size_t(global[v])];
+  classify(&g);
+
+  return global;
+}
+
+// Phase 2: each vertex's generalized quadric (position, and normal and colour
+// when weighted), with border planes so that borders slide along themselves.
+void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& global, const SimplifyInput& in,
+                    bool use_normals, bool use_colors, GroupQuadrics* quadrics) {
+  const JoinedView<Vec3f>& positions = in.positions;
+  GroupQuadrics& q = *quadrics;
+  const std::size_t nv = global.size();
+  q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
+  q.scale = in.scale;
+  q.x.resize(nv);
+  q.full.assign(nv, Quadric());
+  for (std::size_t v = 0; v < nv; ++v) {
+    const std::size_t gv = std::size_t(global[v]);
+    double* x = q.x[v].data();
+    int d = 0;
+    for (int i = 0; i < 3; ++i) x[d++] = double(positions[gv][i]) * in.scale;
+    if (use_normals)
+      for (int i = 0; i < 3; ++i) x[d++] = double(in.normals[gv][i]) * in.normal_weight;
+    if (use_colors)
+      for (int i = 0; i < 3; ++i) x[d++] = double(in.colors[gv][std::size_t(i)]) / 255.0 * in.color_weight;
+  }
+  for (const auto& tri : g.tris) {
+    const double* p[3] = {q.x[std::size_t(tri[0])].data(), q.x[std::size_t(tri[1])].data(), q.x[std::size_t(tri[2])].data()};
+    const Eigen::Vector3d a(p[0][0], p[0][1], p[0][2]), b(p[1][0], p[1][1], p[1][2]), c(p[2][0], p[2][1], p[2][2]);
+    const Eigen::Vector3d normal = (b - a).cross(c - a);
+    const double area = 0.5 * normal.norm();
+    if (!(area > 0)) continue;
+    double basis[2][kMaxDim];
+    Quadric full;
+    if (triangle_basis(p[0], p[1], p[2], q.dim, basis)) full.add_plane(p[0], basis, 2, q.dim, q.dim, area);
+    for (int v : tri) q.full[std::size_t(v)].add(full, q.dim);
+    // Border edges: a plane through the edge and the face normal, so that a
+    // border slides along itself rather than inwards.
+    for (int k = 0; k < 3; ++k) {
+      const int u = tri[std::size_t(k)], w = tri[std::size_t((k + 1) % 3)];
+      if (!g.border[std::size_t(u)] || !g.border[std::size_t(w)]) continue;
+      int uses = 0;
+      for (int t : g.incident[std::size_t(u)]) uses += other_count(g, t, u, w);
+      if (uses != 1) continue;
+      const Eigen::Vector3d pu(q.x[std::size_t(u)][0], q.x[std::size_t(u)][1], q.x[std::size_t(u)][2]);
+      const Eigen::Vector3d pw(q.x[std::size_t(w)][0], q.x[std::size_t(w)][1], q.x[std::size_t(w)][2]);
+      const Eigen::Vector3d edge = pw - pu;
+      if (!(edge.norm() > 0)) continue;
+      double cb[2][kMaxDim] = {};
+      const Eigen::Vector3d e0 = edge.normalized(), e1 = normal.normalized();
+      for (int i = 0; i < 3; ++i) cb[0][i] = e0[i], cb[1][i] = e1[i];
+      Quadric constraint;
+      constraint.add_plane(q.x[std::size_t(u)].data(), cb, 2, 3, q.dim, kBoundaryWeight * edge.squaredNorm());
+      for (int v : {u, w}) q.full[std::size_t(v)].add(constraint, q.dim);
+    }
+  }
+
+}
+
+// Where two vertices meet when their edge collapses, and what it costs there.
+struct Meeting {
+  float cost = 0;
+  bool swap = false;  // `to` goes onto `from`, which stays where it is
+  std::uint32_t from_version = 0, to_version = 0;  // of the quadrics it was computed from
+  std::array<double, kMaxDim> x{};
+};
+
+// Phase 3a: the meeting point of `from` and `to`. At the minimum of their
+// summed quadric (Garland and Heckbert, 1997), attributes included, where it
+// lies within an edge length of the edge's middle; else at an end or the
+// middle, whichever costs least. A locked vertex stays where it is, and so
+// does a border vertex joined by one inside.
+Meeting meeting(const GroupTopology& g, const GroupQuadrics& q, int from, int to, bool optimal) {
+  const std::size_t f = std::size_t(from), t = std::size_t(to);
+  Meeting m;
+  const bool to_fixed = g.locked[t] || (g.border[t] && !g.border[f]);
+  if (to_fixed || !optimal) {
+    m.x = q.x[t];
+    m.cost = float(std::max(0.0, q.full[f].evaluate(m.x.data(), q.dim) + q.full[t].evaluate(m.x.data(), q.dim)));
+    return m;
+  }
+  const double* a = q.x[f].data();
+  const double* b = q.x[t].data();
+  double length2 = 0, off2 = 0, at = 0;
+  for (int i = 0; i < 3; ++i) length2 += (a[i] - b[i]) * (a[i] - b[i]);
+  if (sum_minimum(q.dim, q.full[f], q.full[t], m.x.data(), &at)) {
+    for (int i = 0; i < 3; ++i) off2 += (m.x[std::size_t(i)] - 0.5 * (a[i] + b[i])) * (m.x[std::size_t(i)] - 0.5 * (a[i] + b[i]));
+    if (off2 <= length2) {
+      m.cost = float(std::max(0.0, at));
+      return m;
+    }
+  }
+  m.x = {};
+  std::array<double, kMaxDim> middle{};
+  for (int i = 0; i < q.dim; ++i) middle[std::size_t(i)] = 0.5 * (a[i] + b[i]);
+  auto cost_at = [&](const double* x) { return q.full[f].evaluate(x, q.dim) + q.full[t].evaluate(x, q.dim); };
+  const double at_to = cost_at(b), at_from = cost_at(a), at_middle = cost_at(middle.data());
+  m.x = q.x[t];
+  double best = at_to;
+  if (at_middle < best) best = at_middle, m.x = middle;
+  if (at_from < best && !g.border[t]) best = at_from, m.x = q.x[f], m.swap = true;
+  m.cost = float(std::max(0.0, best));
+  return m;
+}
+
+// Phase 3b: collapses the cheapest edge first until `target` triangles are
+// left. Returns, per vertex, where it went (-1: kept); `moved` marks the
+// kept vertices that are no longer where they were.
+std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopology* group, GroupQuadrics* quadrics,
+                                    std::vector<std::uint8_t>* moved) {
+  GroupTopology& g = *group;
+  GroupQuadrics& q = *quadrics;
+  const std::size_t nv = q.x.size();
+  // Meetings as computed at push, reused at pop while neither quadric has
+  // changed since: computing each twice was a quarter of the build.
+  thread_local std::vector<Meeting> meetings;
+  meetings.clear();
+  std::vector<std::uint32_t> version(nv, 0);
+  auto candidate = [&](int from, int to) {
+    Meeting m = meeting(g, q, from, to, optimal);
+    m.from_version = version[std::size_t(from)], m.to_version = version[std::size_t(to)];
+    meetings.push_back(m);
+    return Candidate{m.cost, from, to, int(meetings.size() - 1)};
+  };
+  std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> heap;
+  std::vector<std::uint8_t> removed(nv, 0);
+  moved->assign(nv, 0);
+  std::vector<int> moved_to(nv, -1);  // where each removed vertex went
+  std::vector<int> around;
+  // Both directions of an edge, or one where both ends move freely (they
+  // meet at the same point either way).
+  auto push_edge = [&](int v, int w) {
+    const bool v_free = !g.locked[std::size_t(v)] && !g.border[std::size_t(v)];
+    const bool w_free = !g.locked[std::size_t(w)] && !g.border[std::size_t(w)];
+    if (!g.locked[std::size_t(v)]) heap.push(candidate(v, w));
+    if (!g.locked[std::size_t(w)] && !(optimal && v_free && w_free)) heap.push(candidate(w, v));
+  };
+  auto push_around = [&](int v) {  // each edge at v, once
+    around.clear();
+    for (int t : g.incident[std::size_t(v)]) {
+      if (g.dead[std::size_t(t)]) continue;
+      for (int w : g.tris[std::size_t(t)])
+        if (w != v && !g.mark[std::size_t(w)]) g.mark[std::size_t(w)] = 1, around.push_back(w);
+    }
+    for (int w : around) {
+      g.mark[std::size_t(w)] = 0;
+      push_edge(v, w);
+    }
+  };
+  // Initially each edge once: from its smaller end.
+  for (std::size_t v = 0; v < nv; ++v) {
+    around.clear();
+    for (int t : g.incident[v])
+      for (int w : g.tris[std::size_t(t)])
+        if (w > int(v) && !g.mark[std::size_t(w)]) g.mark[std::size_t(w)] = 1, around.push_back(w);
+    for (int w : around) {
+      g.mark[std::size_t(w)] = 0;
+      push_edge(int(v), w);
+    }
+  }
+  std::size_t live = g.tris.size();
+  while (live > target && !heap.empty()) {
+    Candidate c = heap.top();
+    heap.pop();
+    if (removed[std::size_t(c.from)] || removed[std::size_t(c.to)]) continue;
+    // Stale: a collapse since moved an end, and pushed the edge afresh then
+    // (push_around). Recomputing stale entries instead, and requeueing
+    // them, computed a ninth of all meetings, each a duplicate.
+    if (meetings[std::size_t(c.meeting)].from_version != version[std::size_t(c.from)] ||
+        meetings[std::size_t(c.meeting)].to_version != version[std::size_t(c.to)]) {
+      continue;
+    }
+    const Meeting m = meetings[std::size_t(c.meeting)];
+    if (m.swap) std::swap(c.from, c.to);
+    if (!collapse_allowed(&g, c.from, c.to, Eigen::Vector3d(m.x[0], m.x[1], m.x[2]), q.x, q.scale)) continue;
+    // Apply: triangles on the edge die, the rest of from's move to `to`,
+    // which moves to the meeting point.
+    for (int t : g.incident[std::size_t(c.from)]) {
+      if (g.dead[std::size_t(t)]) continue;
+      if (other_count(g, t, c.from, c.to)) {
+        g.dead[std::size_t(t)] = 1;
+        --live;
+        continue;
+      }
+      for (int& v : g.tris[std::size_t(t)])
+        if (v == c.from) v = c.to;
+      g.incident[std::size_t(c.to)].push_back(t);
+    }
+    removed[std::size_t(c.from)] = 1;
+    moved_to[std::size_t(c.from)] = c.to;
+    if (!std::equal(m.x.begin(), m.x.begin() + q.dim, q.x[std::size_t(c.to)].begin()))
+      q.x[std::size_t(c.to)] = m.x, (*moved)[std::size_t(c.to)] = 1;
+    q.full[std::size_t(c.to)].add(q.full[std::size_t(c.from)], q.dim);
+    ++version[std::size_t(c.to)];
+    auto& list = g.incident[std::size_t(c.to)];
+    list.erase(std::remove_if(list.begin(), list.end(), [&](int t) { return g.dead[std::size_t(t)] != 0; }),
+               list.end());
+    push_around(c.to);
+  }
+
+  return moved_to;
+}
+
+SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size_t target,
+                               const SimplifyInput& in) {
+  const bool use_normals = in.normal_weight > 0 && !in.normals.empty();
+  const bool use_colors = in.color_weight > 0 && !in.colors.empty();
+  thread_local GroupTopology g;
+  thread_local GroupQuadrics q;  // reused: a group's quadrics are about a megabyte
+  thread_local std::vector<std::array<double, kMaxDim>> origin;
+  thread_local std::vector<std::uint8_t> moved;
+  std::vector<int>& local = group_local_index(in.positions.size());
+  const std::vector<std::int32_t> global = load_group(triangles, in, local, &g);
+  group_quadrics(g, global, in, use_normals, use_colors, &q);
+  origin = q.x;
+  std::vector<int> moved_to = collapse_to_target(target, in.optimal_placement, &g, &q, &moved);
+
+  // Moved vertices become new ones, numbered -1, -2, ... in the order of
+  // their first use.
+  SimplifiedGroup out;
+  std::vector<std::int32_t> id(global.begin(), global.end());
+  for (std::size_t t = 0; t < g.tris.size(); ++t) {
+    if (g.dead[t]) continue;
+    Triangle tri;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t v = std::size_t(g.tris[t][std::size_t(k)]);
+      if (moved[v] == 1) {
+        moved[v] = 2;
+        id[v] = -1 - std::int32_t(out.added_positions.size());
+        const double* x = q.x[v].data();
+        out.added_positions.push_back(Vec3f(float(x[0] / in.scale), float(x[1] / in.scale), float(x[2] / in.scale)));
+        if (!in.normals.empty()) {
+          Vec3f n = in.normals[std::size_t(global[v])];
+          if (use_normals) {
+            const Vec3f solved{float(x[3]), float(x[4]), float(x[5])};
+            if (solved.norm() > 0) n = solved.normalized();
+          }
+          out.added_normals.push_back(n);
+        }
+        if (!in.colors.empty()) {
+          Rgb c = in.colors[std::size_t(global[v])];
+          if (use_colors) {
+            const int at = use_normals ? 6 : 3;
+            for (int i = 0; i < 3; ++i)
+              c[std::size_t(i)] = std::uint8_t(std::clamp(std::lround(x[at + i] / in.color_weight * 255.0), 0L, 255L));
+          }
+          out.added_colors.push_back(c);
+        }
+      }
+      tri[std::size_t(k)] = id[v];
+    }
+    out.triangles.push_back(tri);
+  }
+  out.error = float(removed_vertex_distance(g, moved_to, moved, origin, q.x) / in.scale);
+  for (std::int32_t v : global) local[std::size_t(v)] = -1;
+  return out;
+}
+
+}  // namespace scan2lod
