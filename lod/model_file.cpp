@@ -479,17 +479,29 @@ void save_model(const std::string& path, const LodModel& model) {
   });
 }
 
-LodModel load_model(const std::string& path) {
+namespace {
+
+// `path` opened for reading, and its size; InputError when it is missing,
+// not a regular file, or unreadable.
+int open_model_file(const std::string& path, std::uintmax_t* size) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "cannot read the model: no such file");
   if (!fs::is_regular_file(path, ec)) throw InputError(path, "cannot read the model: not a regular file");
-  const std::uintmax_t size = fs::file_size(path, ec);
+  *size = fs::file_size(path, ec);
   if (ec) throw InputError(path, "cannot read the model: " + ec.message());
-  // Mapped rather than read into a buffer: the decoder copies each section
-  // once, straight from the page cache.
   const int fd = ::open(path.c_str(), O_RDONLY);
   if (fd < 0) throw InputError(path, std::string("cannot read the model: ") + std::strerror(errno));
+  return fd;
+}
+
+}  // namespace
+
+LodModel load_model(const std::string& path) {
+  std::uintmax_t size = 0;
+  const int fd = open_model_file(path, &size);
+  // Mapped rather than read into a buffer: the decoder copies each section
+  // once, straight from the page cache.
   void* mapped = size ? ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0) : MAP_FAILED;
   if (mapped != MAP_FAILED) {
     ::close(fd);
@@ -1122,14 +1134,8 @@ LodModel decode_model(const std::uint8_t* data, std::size_t size, const std::str
 }
 
 ModelPagesHead read_model_pages_head(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path, "cannot read the model: no such file");
-  if (!fs::is_regular_file(path, ec)) throw InputError(path, "cannot read the model: not a regular file");
-  const std::uintmax_t size = fs::file_size(path, ec);
-  if (ec) throw InputError(path, "cannot read the model: " + ec.message());
-  const int fd = ::open(path.c_str(), O_RDONLY);
-  if (fd < 0) throw InputError(path, std::string("cannot read the model: ") + std::strerror(errno));
+  std::uintmax_t size = 0;
+  const int fd = open_model_file(path, &size);
   const std::unique_ptr<int, void (*)(int*)> closing(new int(fd), [](int* f) { ::close(*f), delete f; });
   return Decoder(fd, std::size_t(size), path).decode_pages_head();
 }
