@@ -25,4 +25,8 @@ double parse_bytes(const std::string& text) {
   return value * scale;
 }
 
+std::string size_problem(const std::string& text) {
+  return parse_bytes(text) > 0 ? "" : "expected a size such as 256M or 4G";
+}
+
 }  // namespace scan2lod::cli

@@ -9,4 +9,7 @@ namespace scan2lod::cli {
 // trailing "B" or "iB" is allowed). Returns 0 for anything else.
 double parse_bytes(const std::string& text);
 
+// For CLI11's check(): empty when `text` is a size, else what was expected.
+std::string size_problem(const std::string& text);
+
 }  // namespace scan2lod::cli

@@ -1,8 +1,10 @@
 // scan2lod export: several levels of a .mco model in one process and one
 // model load. glTF (.glb, .gltf) holds them as one MSFT_lod chain over shared
 // vertices (io/gltf_file.h); a mesh format writes one file per level;
-// --format 3dtiles writes a 3D Tiles 1.1 tileset folder (delivery/tileset.h)
-// and the web page that views it (delivery/viewer_page.h).
+// --format 3dtiles writes a 3D Tiles 1.1 tileset folder (delivery/tileset.h),
+// reading the model page by page when the file has pages, and the web page
+// that views it (delivery/viewer_page.h).
+#include <scan2lod/cli/byte_size.h>
 #include <scan2lod/cli/commands.h>
 #include <scan2lod/cli/outputs.h>
 #include <scan2lod/cli/terminal.h>
@@ -12,6 +14,7 @@
 #include <scan2lod/delivery/viewer_page.h>
 #include <scan2lod/io/gltf_file.h>
 #include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/clusters/paged_model.h>
 #include <scan2lod/lod/level_chain.h>
 #include <scan2lod/lod/lod_model.h>
 #include <scan2lod/lod/model_file.h>
@@ -26,6 +29,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 namespace scan2lod::cli {
@@ -84,6 +88,7 @@ struct TilesetArgs {
   std::string model, output, structure;
   long long tile_triangles = 16384;
   bool no_quantize = false, no_meshopt = false, json = false;
+  std::uint64_t cache_bytes = 0;  // pages held at most, when the file has pages
 };
 
 void export_tileset(const TilesetArgs& args) {
@@ -93,7 +98,10 @@ void export_tileset(const TilesetArgs& args) {
   if (args.tile_triangles < 1) throw InputError("", "--tile-triangles must be >= 1");
   refuse_overwriting_inputs(args.output, {args.model});
   auto start = std::chrono::steady_clock::now();
-  const LodModel model = load_model(args.model);
+  // Read page by page when the file has pages (format 4.6), so that memory
+  // is the cluster records, the cache and a tile; older files load whole.
+  std::optional<LodModel> paged = open_paged_model(args.model, args.cache_bytes);
+  const LodModel model = paged ? std::move(*paged) : load_model(args.model);
   const double load_seconds = seconds_since(start);
   TilesetOptions options;
   options.tiles.max_triangles = args.tile_triangles;
@@ -105,6 +113,8 @@ void export_tileset(const TilesetArgs& args) {
   std::vector<std::string> page;
   options.add_files = [&page](const std::string& folder) { page = write_viewer_page(folder); };
   const TilesetReport r = write_tileset(model, args.output, options, args.model);
+  const ClusterPages* pages = model.clusters ? model.clusters->paged.get() : nullptr;
+  const std::uintmax_t file_bytes = fs::file_size(args.model);
   if (args.json) {
     nlohmann::ordered_json j = {{"structure", "clusters"},
                                 {"format", "3dtiles"},
@@ -121,6 +131,11 @@ void export_tileset(const TilesetArgs& args) {
                                 {"triangles", r.triangles},
                                 {"page", page}};
     j["seconds"] = {{"load", load_seconds}, {"plan", r.plan_seconds}, {"write", r.write_seconds}};
+    if (pages)
+      j["read"] = {{"pages", pages->stats().pages_read},
+                   {"bytes", pages->stats().head_bytes + pages->stats().page_bytes_read},
+                   {"file_bytes", file_bytes},
+                   {"peak_cache_bytes", pages->stats().peak_resident_bytes}};
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
@@ -129,6 +144,11 @@ void export_tileset(const TilesetArgs& args) {
       r.tiles, r.content_tiles, r.depth, (long long)r.root_triangles, r.root_error,
       (long long)r.largest_tile_triangles, double(r.bytes) / 1e6, double(r.largest_tile_bytes) / 1e3, load_seconds,
       r.plan_seconds, r.write_seconds, args.output.c_str());
+  if (pages)
+    say("read %llu pages page by page: %.1f MB of a %.1f MB model, at most %.1f MB held\n",
+        (unsigned long long)pages->stats().pages_read,
+        double(pages->stats().head_bytes + pages->stats().page_bytes_read) / 1e6, double(file_bytes) / 1e6,
+        double(pages->stats().peak_resident_bytes) / 1e6);
   if (!page.empty())
     say("page: %s/index.html; scan2lod serve %s, then open the address it prints\n", args.output.c_str(),
         args.output.c_str());
@@ -138,7 +158,7 @@ void export_tileset(const TilesetArgs& args) {
 
 void add_export_command(CLI::App& app) {
   struct Args {
-    std::string model, output, structure, format;
+    std::string model, output, structure, format, cache = "256M";
     std::vector<double> percents;
     std::vector<long long> budgets;
     double pixel_error = 1;
@@ -174,7 +194,10 @@ void add_export_command(CLI::App& app) {
       cmd->add_option("--tile-triangles", args->tile_triangles,
                       "3dtiles only: most triangles a tile holds (the root holds the coarsest cut)")
           ->default_val(16384),
-      cmd->add_flag("--no-meshopt", args->no_meshopt, "3dtiles only: no EXT_meshopt_compression")};
+      cmd->add_flag("--no-meshopt", args->no_meshopt, "3dtiles only: no EXT_meshopt_compression"),
+      cmd->add_option("--cache", args->cache,
+                      "3dtiles only: pages of the model held in memory at most (default 256M), when the file has "
+                      "pages (format 4.6); older files are read whole")};
   // Only glTF stores screen coverage: with a mesh format they would change nothing.
   const std::vector<CLI::Option*> coverage_flags = {
       cmd->add_option("--pixel-error", args->pixel_error,
@@ -195,8 +218,10 @@ void add_export_command(CLI::App& app) {
         if (flag->count())
           throw CLI::ValidationError(flag->get_name(), "does not apply to --format 3dtiles: the viewer refines "
                                                        "by each tile's geometricError");
+      const double cache = parse_bytes(args->cache);
+      if (!(cache > 0)) throw CLI::ValidationError("--cache", size_problem(args->cache));
       export_tileset({args->model, args->output, args->structure, args->tile_triangles, args->no_quantize,
-                      args->no_meshopt, args->json});
+                      args->no_meshopt, args->json, std::uint64_t(cache)});
       return;
     }
     for (const CLI::Option* flag : tileset_flags)

@@ -93,7 +93,7 @@ void add_extract_command(CLI::App& app) {
   cmd->add_option("--cache", args->cache,
                   "Clusters: pages of the model held in memory at most (default 256M); a cut reads only the pages "
                   "of the clusters it draws")
-      ->check([](const std::string& text) { return parse_bytes(text) > 0 ? "" : "expected a size such as 256M or 1G"; });
+      ->check(size_problem);
   CLI::Option* priority =
       cmd->add_option("--priority", args->priority, "Octree: the level after N expansions (0: the root's mesh)");
   cmd->add_flag("--json", args->json,

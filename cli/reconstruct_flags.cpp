@@ -60,7 +60,7 @@ void add_reconstruct_flags(CLI::App* cmd, ReconstructFlags* flags) {
   cmd->add_option("--memory", flags->memory,
                   "Memory the work may take, e.g. 400M or 4G (default: what the machine has available, less a "
                   "tenth). A reconstruction whose estimate exceeds it runs brick by brick, with the same surface")
-      ->check([](const std::string& text) { return parse_bytes(text) > 0 ? "" : "expected a size such as 400M or 4G"; });
+      ->check(size_problem);
   cmd->add_option("--work-dir", flags->work_dir,
                   "Folder for the bricks; run again with the same folder, a killed build resumes from its finished "
                   "bricks (default: OUTPUT.work, removed when the output is written)");

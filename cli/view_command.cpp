@@ -37,7 +37,7 @@ void add_view_command(CLI::App& app) {
   cmd->add_option("--cache", args->cache,
                   "A model with pages is read page by page, holding at most this much (e.g. 256M), starting on "
                   "the camera cut; without it the model is read whole")
-      ->check([](const std::string& text) { return parse_bytes(text) > 0 ? "" : "expected a size such as 256M or 1G"; });
+      ->check(size_problem);
   cmd->add_option("--structure", args->structure,
                   "A model's LOD structure to show: clusters (keys c, f, l: camera cut, freeze, DAG levels) or "
                   "octree (key o: cells); default: clusters when the model has them")

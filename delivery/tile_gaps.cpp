@@ -41,13 +41,14 @@ bool contains(const Aabb& box, const Vec3f& p) {
 // triangle queries.
 class TriangleGrid {
  public:
-  TriangleGrid(const VertexArray& v, const Tile& tile) : v_(&v), tile_(&tile) {
+  TriangleGrid(const TileContent& content, const Tile& tile) : content_(&content), tile_(&tile) {
+    const VertexArray& v = content.vertices;
     const Vec3f extent = tile.content_box.extent();
-    const float cells = std::max(1.f, std::cbrt(float(tile.triangles.size()) / 4.f));
+    const float cells = std::max(1.f, std::cbrt(float(content.triangles.size()) / 4.f));
     size_ = std::max(extent.maxCoeff() / cells, 1e-20f);
-    for (std::size_t t = 0; t < tile.triangles.size(); ++t) {
+    for (std::size_t t = 0; t < content.triangles.size(); ++t) {
       Aabb box;
-      for (std::int32_t i : tile.triangles[t]) box.extend(v.positions[std::size_t(i)]);
+      for (std::int32_t i : content.triangles[t]) box.extend(v.positions[std::size_t(i)]);
       const auto lo = cell_of(box.min), hi = cell_of(box.max);
       for (long x = lo[0]; x <= hi[0]; ++x)
         for (long y = lo[1]; y <= hi[1]; ++y)
@@ -69,10 +70,11 @@ class TriangleGrid {
             const auto it = cells_.find(key(x, y, z));
             if (it == cells_.end()) continue;
             for (std::int32_t t : it->second) {
-              const Triangle& tri = tile_->triangles[std::size_t(t)];
-              const Vec3f q = closest_on_triangle(p, v_->positions[std::size_t(tri[0])],
-                                                  v_->positions[std::size_t(tri[1])],
-                                                  v_->positions[std::size_t(tri[2])]);
+              const Triangle& tri = content_->triangles[std::size_t(t)];
+              const VertexArray& v = content_->vertices;
+              const Vec3f q = closest_on_triangle(p, v.positions[std::size_t(tri[0])],
+                                                  v.positions[std::size_t(tri[1])],
+                                                  v.positions[std::size_t(tri[2])]);
               best = std::min(best, (q - p).norm());
             }
           }
@@ -87,7 +89,7 @@ class TriangleGrid {
   static std::uint64_t key(long x, long y, long z) {
     return (std::uint64_t(x & 0x1FFFFF) << 42) | (std::uint64_t(y & 0x1FFFFF) << 21) | std::uint64_t(z & 0x1FFFFF);
   }
-  const VertexArray* v_;
+  const TileContent* content_;
   const Tile* tile_;
   float size_;
   std::unordered_map<std::uint64_t, std::vector<std::int32_t>> cells_;
@@ -95,9 +97,10 @@ class TriangleGrid {
 
 // Points on the tile's seam: the ends and middles of the edges only one of
 // its triangles uses, where the edge lies outside the tile's cell.
-std::vector<Vec3f> seam_points(const VertexArray& v, const Tile& tile) {
+std::vector<Vec3f> seam_points(const TileContent& content, const Tile& tile) {
+  const VertexArray& v = content.vertices;
   std::unordered_map<std::uint64_t, int> uses;
-  for (const Triangle& t : tile.triangles)
+  for (const Triangle& t : content.triangles)
     for (int k = 0; k < 3; ++k) ++uses[edge_key(t[k], t[(k + 1) % 3])];
   std::vector<Vec3f> points;
   for (const auto& [key, n] : uses) {
@@ -126,7 +129,7 @@ void add(TileGapStats* s, double gap, double error, double tolerance) {
 
 }  // namespace
 
-TileGaps measure_tile_gaps(const VertexArray& vertices, const TileTree& tree, double tolerance,
+TileGaps measure_tile_gaps(const TileTree& tree, const std::vector<TileContent>& contents, double tolerance,
                            int depth_differences) {
   TileGaps out;
   out.by_depth_difference.resize(std::size_t(std::max(1, depth_differences)));
@@ -134,13 +137,14 @@ TileGaps measure_tile_gaps(const VertexArray& vertices, const TileTree& tree, do
   for (std::size_t a = 0; a < tree.tiles.size(); ++a) {
     const Tile& ta = tree.tiles[a];
     if (!ta.has_content()) continue;
-    for (const Vec3f& p : seam_points(vertices, ta)) {
+    for (const Vec3f& p : seam_points(contents[a], ta)) {
       // The tiles whose cells hold p, one per depth at most, found from the root.
       for (int b = 0; b >= 0;) {
         const Tile& tb = tree.tiles[std::size_t(b)];
         if (tb.has_content() && !ancestor_of(tree, b, int(a)) && !ancestor_of(tree, int(a), b) && b != int(a)) {
-          if (!grids[std::size_t(b)]) grids[std::size_t(b)] = std::make_unique<TriangleGrid>(vertices, tb);
-          const double gap = grids[std::size_t(b)]->distance(p);
+          std::unique_ptr<TriangleGrid>& grid = grids[std::size_t(b)];
+          if (!grid) grid = std::make_unique<TriangleGrid>(contents[std::size_t(b)], tb);
+          const double gap = grid->distance(p);
           const double error = std::max(ta.geometric_error, tb.geometric_error);
           const std::size_t d = std::min<std::size_t>(std::size_t(std::abs(ta.depth - tb.depth)),
                                                       out.by_depth_difference.size() - 1);

@@ -30,7 +30,9 @@ struct TileGaps {
   TileGapStats all;
 };
 
-TileGaps measure_tile_gaps(const VertexArray& vertices, const TileTree& tree, double tolerance,
+// contents[i]: tree.tiles[i]'s, as plan_tiles handed it out (empty for a
+// tile without content); all held at once, so for models that fit.
+TileGaps measure_tile_gaps(const TileTree& tree, const std::vector<TileContent>& contents, double tolerance,
                            int depth_differences = 3);
 
 }  // namespace scan2lod

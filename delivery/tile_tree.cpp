@@ -1,6 +1,8 @@
 #include <scan2lod/delivery/tile_tree.h>
 
 #include <scan2lod/core/error.h>
+#include <scan2lod/core/flat_hash.h>
+#include <scan2lod/delivery/cluster_geometry.h>
 
 #include <algorithm>
 #include <cmath>
@@ -17,13 +19,19 @@ struct ClusterFacts {
 };
 
 struct Planner {
-  const LodModel* model;
+  Planner(const LodModel& model, const TileOptions& options, const TileContentSink& sink)
+      : h(&*model.clusters), options(&options), sink(&sink), geometry(model) {}
   const ClusterHierarchy* h;
   const TileOptions* options;
+  const TileContentSink* sink;
+  ClusterGeometry geometry;
   std::vector<ClusterFacts> facts;
   std::vector<float> thresholds;  // kFullDetail, then the distinct group errors rising
   TileTree tree;
-  std::int64_t placed = 0, stored = 0;
+  std::int64_t placed = 0;
+  // The tile being filled: its content, and the model's vertex -> its own.
+  TileContent content;
+  FlatHashMap tile_vertices{1024};
 };
 
 bool overlaps(const Aabb& a, const Aabb& b) {
@@ -34,9 +42,9 @@ bool inside(const Aabb& a, const Aabb& cell) {
   return (cell.min.array() <= a.min.array()).all() && (a.max.array() <= cell.max.array()).all();
 }
 
-Aabb triangle_box(const Planner& p, const Triangle& t) {
+Aabb triangle_box(const ClusterTriangles& ct, const Triangle& t) {
   Aabb box;
-  for (std::int32_t v : t) box.extend(p.model->vertices.positions[std::size_t(v)]);
+  for (std::int32_t v : t) box.extend(ct.positions[v]);
   return box;
 }
 
@@ -59,30 +67,37 @@ void gather_facts(Planner& p) {
     // level-0 cluster is drawn at kFullDetail and nothing else is.
     if (cl.own_group >= 0) f.own = std::max(0.f, h.groups[std::size_t(cl.own_group)].error);
     if (cl.parent_group >= 0) f.parent = std::max(0.f, h.groups[std::size_t(cl.parent_group)].error);
-    for (std::uint32_t t = 0; t < cl.triangle_count; ++t)
-      for (std::int32_t v : h.triangles[cl.first_triangle + t]) f.box.extend(p.model->vertices.positions[std::size_t(v)]);
+    const ClusterTriangles ct = p.geometry.triangles(std::int32_t(c));
+    for (std::size_t t = 0; t < ct.count; ++t)
+      for (std::int32_t v : ct.triangles[t]) f.box.extend(ct.positions[v]);
     p.tree.bounds.extend(f.box.min);
     p.tree.bounds.extend(f.box.max);
   }
   p.tree.coarsest_error = p.thresholds.back() == kFullDetail ? 0.f : p.thresholds.back();
   p.tree.full_triangles = h.full_triangles;
-  p.stored = std::int64_t(h.triangles.size());
+}
+
+// Triangles of cluster `c` that touch `cell`.
+std::int32_t touching_cell(Planner& p, std::int32_t c, const Aabb& cell) {
+  if (inside(p.facts[std::size_t(c)].box, cell)) return p.h->clusters[std::size_t(c)].triangle_count;
+  const ClusterTriangles ct = p.geometry.triangles(c);
+  std::int32_t n = 0;
+  for (std::size_t t = 0; t < ct.count; ++t) n += overlaps(triangle_box(ct, ct.triangles[t]), cell);
+  return n;
 }
 
 // Triangles of the cut at `threshold` that touch `cell`, among `candidates`.
-std::int64_t count_in_cell(const Planner& p, const std::vector<std::int32_t>& candidates, float threshold,
-                           const Aabb& cell) {
+// touching[i] is candidates[i]'s touching_cell, counted when first asked
+// (-1 before): the search for a cell's cut asks at several thresholds, and a
+// cluster's triangles, perhaps a page read from disk, are read once.
+std::int64_t count_in_cell(Planner& p, const std::vector<std::int32_t>& candidates, float threshold,
+                           const Aabb& cell, std::vector<std::int32_t>* touching) {
   std::int64_t n = 0;
-  for (std::int32_t c : candidates) {
-    const ClusterFacts& f = p.facts[std::size_t(c)];
-    if (!drawn_at(f, threshold)) continue;
-    const Cluster& cl = p.h->clusters[std::size_t(c)];
-    if (inside(f.box, cell)) {
-      n += cl.triangle_count;
-      continue;
-    }
-    for (std::uint32_t t = 0; t < cl.triangle_count; ++t)
-      n += overlaps(triangle_box(p, p.h->triangles[cl.first_triangle + t]), cell);
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (!drawn_at(p.facts[std::size_t(candidates[i])], threshold)) continue;
+    std::int32_t& count = (*touching)[i];
+    if (count < 0) count = touching_cell(p, candidates[i], cell);
+    n += count;
   }
   return n;
 }
@@ -91,39 +106,68 @@ std::int64_t count_in_cell(const Planner& p, const std::vector<std::int32_t>& ca
 // `cell`, or `above` when none does. Finer cuts hold more triangles nearly
 // always (a coarse triangle may touch a cell its finer ones miss), so a
 // binary search finds it.
-std::size_t finest_fitting(const Planner& p, const std::vector<std::int32_t>& candidates, std::size_t above,
+std::size_t finest_fitting(Planner& p, const std::vector<std::int32_t>& candidates, std::size_t above,
                            const Aabb& cell) {
   const std::int64_t budget = p.options->max_triangles;
   if (above == 0) return 0;
-  if (count_in_cell(p, candidates, p.thresholds[above - 1], cell) > budget) return above;
+  std::vector<std::int32_t> touching(candidates.size(), -1);
+  if (count_in_cell(p, candidates, p.thresholds[above - 1], cell, &touching) > budget) return above;
   std::size_t lo = 0, hi = above - 1;  // hi fits
   while (lo < hi) {
     const std::size_t mid = (lo + hi) / 2;
-    if (count_in_cell(p, candidates, p.thresholds[mid], cell) <= budget) hi = mid;
+    if (count_in_cell(p, candidates, p.thresholds[mid], cell, &touching) <= budget) hi = mid;
     else lo = mid + 1;
   }
   return hi;
 }
 
-// Fills `tile`'s content: the cut at its threshold, triangles touching its cell.
+// Vertex `i` of `ct` as the tile's own, added the first time the tile uses it.
+std::int32_t tile_vertex(Planner& p, Tile& tile, const ClusterTriangles& ct, std::int32_t i) {
+  TileContent& out = p.content;
+  const std::uint32_t model_vertex = ct.model_vertex(i);
+  const std::int32_t next = std::int32_t(out.model_vertices.size());
+  const std::int32_t id = p.tile_vertices.insert(model_vertex, next);
+  if (id != next) return id;
+  out.model_vertices.push_back(model_vertex);
+  out.vertices.positions.push_back(ct.positions[i]);
+  if (ct.normals) out.vertices.normals.push_back(ct.normals[i]);
+  if (ct.colors) out.vertices.colors.push_back(ct.colors[i]);
+  tile.content_box.extend(ct.positions[i]);
+  return id;
+}
+
+// Fills `tile`'s content (into p.content): the cut at its threshold,
+// triangles touching its cell.
 void take_content(Planner& p, Tile& tile, const std::vector<std::int32_t>& candidates) {
+  TileContent& out = p.content;
+  out.vertices.positions.clear();
+  out.vertices.normals.clear();
+  out.vertices.colors.clear();
+  out.triangles.clear();
+  out.model_vertices.clear();
+  p.tile_vertices.clear();
   for (std::int32_t c : candidates) {
     const ClusterFacts& f = p.facts[std::size_t(c)];
     if (!drawn_at(f, tile.threshold)) continue;
-    const Cluster& cl = p.h->clusters[std::size_t(c)];
     const bool whole = inside(f.box, tile.cell);
-    const std::size_t before = tile.triangles.size();
-    for (std::uint32_t t = 0; t < cl.triangle_count; ++t) {
-      const Triangle& tri = p.h->triangles[cl.first_triangle + t];
-      if (whole || overlaps(triangle_box(p, tri), tile.cell)) tile.triangles.push_back(tri);
+    const std::size_t before = out.triangles.size();
+    const ClusterTriangles ct = p.geometry.triangles(c);
+    for (std::size_t t = 0; t < ct.count; ++t) {
+      const Triangle& tri = ct.triangles[t];
+      if (!whole && !overlaps(triangle_box(ct, tri), tile.cell)) continue;
+      out.triangles.push_back({tile_vertex(p, tile, ct, tri[0]), tile_vertex(p, tile, ct, tri[1]),
+                               tile_vertex(p, tile, ct, tri[2])});
     }
-    if (tile.triangles.size() == before) continue;
-    tile.clusters.push_back(c);
+    if (out.triangles.size() == before) continue;
     tile.content_error = std::max(tile.content_error, std::max(0.f, f.own));
   }
-  for (const Triangle& t : tile.triangles)
-    for (std::int32_t v : t) tile.content_box.extend(p.model->vertices.positions[std::size_t(v)]);
-  if (tile.threshold == kFullDetail) p.placed += std::int64_t(tile.triangles.size());
+  tile.triangle_count = std::int64_t(out.triangles.size());
+  if (tile.threshold == kFullDetail) p.placed += tile.triangle_count;
+}
+
+// Hands tiles[index]'s content out, once the tile is in the tree.
+void deliver(const Planner& p, std::size_t index) {
+  if (*p.sink && p.tree.tiles[index].has_content()) (*p.sink)(p.tree, index, p.content);
 }
 
 Aabb octant(const Aabb& cell, int o) {
@@ -178,6 +222,7 @@ void split(Planner& p, int index, std::size_t level, const std::vector<std::int3
     const int child_index = int(p.tree.tiles.size());
     p.tree.tiles.push_back(std::move(child));
     p.tree.tiles[std::size_t(index)].children.push_back(child_index);
+    deliver(p, std::size_t(child_index));
     report_progress(p);
     split(p, child_index, child_level, mine);
   }
@@ -212,15 +257,14 @@ void settle_empty_tiles(TileTree& tree) {
 
 }  // namespace
 
-TileTree plan_tiles(const LodModel& model, const TileOptions& options, const std::string& source) {
+TileTree plan_tiles(const LodModel& model, const TileOptions& options, const std::string& source,
+                    const TileContentSink& content) {
   require_structure(model, LodStructure::kClusters, source);
   if (options.max_triangles < 1) throw InputError(source, "a tile must hold at least one triangle");
-  Planner p;
-  p.model = &model;
-  p.h = &*model.clusters;
-  p.options = &options;
-  if (p.h->clusters.empty()) throw InputError(source, "the cluster hierarchy has no clusters");
-  if (p.h->spool) throw InputError(source, "the cluster hierarchy's triangles are still spooled; save the model first");
+  if (model.clusters->clusters.empty()) throw InputError(source, "the cluster hierarchy has no clusters");
+  if (model.clusters->spool)
+    throw InputError(source, "the cluster hierarchy's triangles are still spooled; save the model first");
+  Planner p(model, options, content);
   gather_facts(p);
   // A cubic root cell, so that octants stay cubes and a cell's size says its depth.
   Aabb cell = p.tree.bounds;
@@ -238,6 +282,7 @@ TileTree plan_tiles(const LodModel& model, const TileOptions& options, const std
   root.threshold = p.thresholds[top];
   take_content(p, root, all);
   p.tree.tiles.push_back(std::move(root));
+  deliver(p, 0);
   split(p, 0, top, all);
   settle_errors_and_boxes(p.tree);
   settle_empty_tiles(p.tree);

@@ -24,10 +24,17 @@
 // A tile's geometric error is measured, not halved by rule: the largest error
 // of the groups that made its clusters (0 at full detail), raised to its
 // children's where a child's is larger, so that errors never grow going down.
+//
+// The model may be in memory (load_model) or read page by page
+// (open_paged_model): the tiles are the same. Each tile's content is handed
+// out as soon as it is decided and not kept, so that planning holds the
+// cluster records, the page cache and about one tile, whatever the model's
+// size.
 #pragma once
 
 #include <scan2lod/core/types.h>
 #include <scan2lod/lod/lod_model.h>
+#include <scan2lod/lod/octree/mc_octree.h>
 
 #include <cstdint>
 #include <functional>
@@ -56,13 +63,12 @@ struct Tile {
   std::string name;                  // the octant path: "r", "r5", "r57", ...
   Aabb cell;                         // the octree cell
   float threshold = kFullDetail;     // the cut it holds
-  std::vector<Triangle> triangles;   // its content, into the model's vertices; empty: no content
-  std::vector<std::int32_t> clusters;  // the clusters those triangles come from
-  float content_error = 0;           // the largest own-group error of those clusters (0: full detail)
+  std::int64_t triangle_count = 0;   // its content's triangles; 0: no content
+  float content_error = 0;           // the largest own-group error of their clusters (0: full detail)
   float geometric_error = 0;         // max of content_error over its subtree
   Aabb content_box;                  // around its triangles' vertices
   Aabb subtree_box;                  // around its and its descendants' content
-  bool has_content() const { return !triangles.empty(); }
+  bool has_content() const { return triangle_count > 0; }
   bool leaf() const { return children.empty(); }
 };
 
@@ -73,8 +79,26 @@ struct TileTree {
   std::int64_t full_triangles = 0;
 };
 
-// Plans the tiles of `model`'s cluster hierarchy. Throws InputError (naming
-// `source`) when the model has no cluster hierarchy.
-TileTree plan_tiles(const LodModel& model, const TileOptions& options = {}, const std::string& source = "");
+// A tile's content: its triangles over vertices of its own, numbered in the
+// order the triangles first use them, one vertex for each of the model's
+// (however many clusters or pages name it).
+struct TileContent {
+  VertexArray vertices;                       // normals and colours when the model has them
+  std::vector<Triangle> triangles;            // into `vertices`, cluster by cluster
+  std::vector<std::uint32_t> model_vertices;  // each vertex's number in the model
+};
+
+// Called once for each tile with content, as soon as that content is
+// decided: tree.tiles[index] is the tile, its name, cell, counts and
+// content_box final (its children, geometric_error and subtree_box not yet),
+// and so is tree.bounds. `content` is reused once the call returns.
+using TileContentSink = std::function<void(const TileTree& tree, std::size_t index, const TileContent& content)>;
+
+// Plans the tiles of `model`'s cluster hierarchy, in memory or read page by
+// page, handing each tile's content to `content` (may be empty). Throws
+// InputError (naming `source`) when the model has no cluster hierarchy, and
+// what reading a page throws.
+TileTree plan_tiles(const LodModel& model, const TileOptions& options = {}, const std::string& source = "",
+                    const TileContentSink& content = {});
 
 }  // namespace scan2lod

@@ -89,6 +89,31 @@ struct Staging {
   }
 };
 
+// Writes each tile's .glb as the planner hands its content out, keeping only
+// the report's figures.
+struct TileFiles {
+  const fs::path& folder;
+  const TilesetOptions& options;
+  const std::string& dir;
+  TilesetReport* report;
+  double seconds = 0;  // spent in write(), within plan_tiles
+
+  void write(const TileTree& tree, std::size_t index, const TileContent& content) {
+    const auto start = std::chrono::steady_clock::now();
+    const Tile& t = tree.tiles[index];
+    // The grid depends on the bounds alone, which are final before any tile.
+    const TileGlb glb = tile_glb(content.vertices, content.triangles, position_grid(tree.bounds), options.glb);
+    write_file(folder / tile_uri(t), glb.bytes.data(), glb.bytes.size(), dir);
+    ++report->content_tiles;
+    report->bytes += glb.bytes.size();
+    report->largest_tile_bytes = std::max<std::uint64_t>(report->largest_tile_bytes, glb.bytes.size());
+    report->triangles += t.triangle_count;
+    if (index == 0) report->root_triangles = t.triangle_count;
+    else report->largest_tile_triangles = std::max(report->largest_tile_triangles, t.triangle_count);
+    seconds += seconds_since(start);
+  }
+};
+
 }  // namespace
 
 float tileset_quantization_step(const TileTree& tree, const TileGlbOptions& options) {
@@ -122,14 +147,6 @@ TilesetReport write_tileset(const LodModel& model, const std::string& dir, const
   if (target.empty() || target.filename().empty() || target.filename() == "." || target.filename() == "..")
     throw InputError(dir, "name a folder for the tileset");
   check_destination(target, source);
-  TilesetReport report;
-  auto start = std::chrono::steady_clock::now();
-  TileOptions tile_options = options.tiles;
-  if (options.progress) tile_options.progress = [&](double f) { options.progress("plan", f); };
-  const TileTree tree = plan_tiles(model, tile_options, source);
-  report.plan_seconds = seconds_since(start);
-
-  start = std::chrono::steady_clock::now();
   const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::error_code ec;
   if (!fs::is_directory(parent, ec)) throw InputError(dir, "the folder " + parent.string() + " does not exist");
@@ -138,24 +155,23 @@ TilesetReport write_tileset(const LodModel& model, const std::string& dir, const
   if (!fs::create_directories(staging.path / "tiles", ec) || ec)
     throw InputError(dir, "cannot create the folder " + staging.path.string() + ": " + ec.message());
 
-  const PositionGrid grid = position_grid(tree.bounds);
-  std::size_t written = 0, with_content = 0;
-  for (const Tile& t : tree.tiles) with_content += t.has_content();
-  for (std::size_t i = 0; i < tree.tiles.size(); ++i) {
-    const Tile& t = tree.tiles[i];
+  // Each tile is written as soon as it is planned, so that no tile's
+  // triangles outlive it.
+  TilesetReport report;
+  auto start = std::chrono::steady_clock::now();
+  TileFiles files{staging.path, options, dir, &report};
+  TileOptions tile_options = options.tiles;
+  if (options.progress) tile_options.progress = [&](double f) { options.progress("write", f); };
+  const TileTree tree =
+      plan_tiles(model, tile_options, source,
+                 [&files](const TileTree& t, std::size_t i, const TileContent& c) { files.write(t, i, c); });
+  report.plan_seconds = seconds_since(start) - files.seconds;
+
+  start = std::chrono::steady_clock::now();
+  for (const Tile& t : tree.tiles) {
     ++report.tiles;
     report.depth = std::max(report.depth, t.depth);
     report.leaves += t.leaf();
-    if (!t.has_content()) continue;
-    const TileGlb glb = tile_glb(model.vertices, t.triangles, grid, options.glb);
-    write_file(staging.path / tile_uri(t), glb.bytes.data(), glb.bytes.size(), dir);
-    ++report.content_tiles;
-    report.bytes += glb.bytes.size();
-    report.largest_tile_bytes = std::max<std::uint64_t>(report.largest_tile_bytes, glb.bytes.size());
-    report.triangles += std::int64_t(t.triangles.size());
-    if (i == 0) report.root_triangles = std::int64_t(t.triangles.size());
-    else report.largest_tile_triangles = std::max(report.largest_tile_triangles, std::int64_t(t.triangles.size()));
-    if (options.progress) options.progress("write", double(++written) / double(with_content));
   }
   report.root_error = tree.tiles[0].geometric_error;
   const std::string text = tileset_json(tree, model.origin, tileset_quantization_step(tree, options.glb),
@@ -179,7 +195,7 @@ TilesetReport write_tileset(const LodModel& model, const std::string& dir, const
   }
   staging.done = true;
   if (replacing) fs::remove_all(old, ec);
-  report.write_seconds = seconds_since(start);
+  report.write_seconds = files.seconds + seconds_since(start);
   return report;
 }
 

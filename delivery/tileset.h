@@ -18,6 +18,11 @@
 // The folder appears complete or not at all: the tiles are written into a
 // hidden folder beside it, which is renamed into place at the end (an old
 // tileset there is replaced; any other folder is refused).
+//
+// Each tile is written as soon as the planner decides its content, so that
+// memory holds the cluster records, the page cache of a model read page by
+// page (lod/clusters/paged_model.h) and about one tile: a model too large to load
+// whole is tiled from its pages, into the same bytes.
 #pragma once
 
 #include <scan2lod/delivery/tile_glb.h>
@@ -33,7 +38,8 @@ namespace scan2lod {
 struct TilesetOptions {
   TileOptions tiles;
   TileGlbOptions glb;
-  // Called with a stage's name ("plan", "write") and how far it is (0 to 1);
+  // Called with a stage's name ("write": tiles planned and written, as the
+  // share of the full-detail triangles placed) and how far it is (0 to 1);
   // may be empty.
   std::function<void(const std::string&, double)> progress;
   // Called with the folder being written (not yet in place) after the tiles
@@ -52,14 +58,16 @@ struct TilesetReport {
   std::int64_t root_triangles = 0;
   std::int64_t triangles = 0;         // over every tile
   double root_error = 0;
-  double plan_seconds = 0, write_seconds = 0;
+  double plan_seconds = 0;            // reading clusters and choosing cuts
+  double write_seconds = 0;           // encoding and writing the files, interleaved with planning
 };
 
-// Writes the tileset of `model` into the folder `dir` (created; an existing
-// tileset there is replaced). `source` names the model in errors. Throws
-// InputError when the model has no cluster hierarchy, when `dir` is a folder
-// that holds something other than a tileset, or when a write fails; nothing
-// is left at `dir` then.
+// Writes the tileset of `model` (loaded whole, or opened with
+// open_paged_model: the same files) into the folder `dir` (created; an
+// existing tileset there is replaced). `source` names the model in errors.
+// Throws InputError when the model has no cluster hierarchy, when `dir` is a
+// folder that holds something other than a tileset, when a page cannot be
+// read or a write fails; nothing is left at `dir` then.
 TilesetReport write_tileset(const LodModel& model, const std::string& dir, const TilesetOptions& options = {},
                             const std::string& source = "");
 

@@ -1,10 +1,12 @@
 // 3D Tiles 1.1 output (delivery/): `scan2lod export M.mco --format 3dtiles`
 // on the bunny, checked by CesiumGS's 3D Tiles Validator (bundled in
-// ../shared/tools), every tile by the Khronos glTF-Validator, and against the
-// model's own cluster hierarchy.
+// ../shared/tools), every tile by the Khronos glTF-Validator, against the
+// model's own cluster hierarchy, and against the same model read page by
+// page.
 #include <scan2lod/delivery/tile_gaps.h>
 #include <scan2lod/delivery/tile_tree.h>
 #include <scan2lod/delivery/tileset.h>
+#include <scan2lod/lod/clusters/paged_model.h>
 #include <scan2lod/lod/lod_model.h>
 #include <scan2lod/lod/model_file.h>
 #include "test_support.h"
@@ -17,6 +19,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <map>
+#include <optional>
 #include <set>
 
 namespace scan2lod {
@@ -89,6 +94,30 @@ const fs::path& bunny_tileset() {
     return d;
   }();
   return dir;
+}
+
+// The plan, and each tile's content as the planner hands it out (empty for
+// tiles without).
+TileTree plan_with_contents(const LodModel& model, const TileOptions& options, std::vector<TileContent>* contents) {
+  const auto keep = [contents](const TileTree&, std::size_t i, const TileContent& c) {
+    if (contents->size() <= i) contents->resize(i + 1);
+    (*contents)[i] = c;
+  };
+  const TileTree tree = plan_tiles(model, options, "", keep);
+  contents->resize(tree.tiles.size());
+  return tree;
+}
+
+// Every file under `dir`, by its path there, with its bytes.
+std::map<std::string, std::string> files_under(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    std::ifstream in(e.path(), std::ios::binary);
+    files[fs::relative(e.path(), dir).string()] =
+        std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  return files;
 }
 
 std::vector<float> group_errors(const LodModel& model) {
@@ -170,15 +199,21 @@ TEST(Tiles, TheLeavesTogetherAreTheFullDetailMesh) {
   const LodModel model = load_model(testing::bunny_model().string());
   TileOptions options;
   options.max_triangles = kTileTriangles;
-  const TileTree tree = plan_tiles(model, options);
+  std::vector<TileContent> contents;
+  const TileTree tree = plan_with_contents(model, options, &contents);
   std::set<Triangle> leaves;
   std::int64_t leaf_triangles = 0;
-  for (const Tile& t : tree.tiles) {
+  for (std::size_t i = 0; i < tree.tiles.size(); ++i) {
+    const Tile& t = tree.tiles[i];
     if (!t.leaf()) continue;
     EXPECT_EQ(t.threshold, kFullDetail) << t.name;
     EXPECT_EQ(t.geometric_error, 0.f) << t.name;
-    leaves.insert(t.triangles.begin(), t.triangles.end());
-    leaf_triangles += std::int64_t(t.triangles.size());
+    EXPECT_EQ(std::int64_t(contents[i].triangles.size()), t.triangle_count) << t.name;
+    const std::vector<std::uint32_t>& model_vertex = contents[i].model_vertices;
+    for (const Triangle& tri : contents[i].triangles)
+      leaves.insert({std::int32_t(model_vertex[std::size_t(tri[0])]), std::int32_t(model_vertex[std::size_t(tri[1])]),
+                     std::int32_t(model_vertex[std::size_t(tri[2])])});
+    leaf_triangles += t.triangle_count;
   }
   LevelExtractor extractor(model, LodStructure::kClusters);
   std::vector<Triangle> full = extractor.extract(LevelRequest::at_percent(100)).triangles;
@@ -198,9 +233,10 @@ TEST(Tiles, GapsBetweenNeighbouringTilesStayUnderTheirError) {
   const LodModel model = load_model(testing::bunny_model().string());
   TileOptions options;
   options.max_triangles = kTileTriangles;
-  const TileTree tree = plan_tiles(model, options);
+  std::vector<TileContent> contents;
+  const TileTree tree = plan_with_contents(model, options, &contents);
   const double step = tileset_quantization_step(tree, TileGlbOptions{});
-  const TileGaps gaps = measure_tile_gaps(model.vertices, tree, step);
+  const TileGaps gaps = measure_tile_gaps(tree, contents, step);
   for (std::size_t d = 0; d < gaps.by_depth_difference.size(); ++d)
     std::printf("depth difference %zu%s: %lld seam points, widest gap %.3g (%.3g of the bounds' diagonal), "
                 "largest gap/error %.3g, over the error %lld\n",
@@ -211,6 +247,36 @@ TEST(Tiles, GapsBetweenNeighbouringTilesStayUnderTheirError) {
   EXPECT_GT(gaps.by_depth_difference[1].points, 100);
   EXPECT_EQ(gaps.all.over, 0);
   EXPECT_LT(gaps.all.max_ratio, 1.0);
+}
+
+// Read page by page within a budget smaller than a page, so that every page
+// is dropped and read again as the planner comes back to it, the model
+// gives the same tileset as loaded whole: every .glb and tileset.json, byte
+// for byte.
+TEST(Tiles, APagedModelGivesTheWholeModelsTilesetByteForByte) {
+  const std::string path = testing::bunny_model().string();
+  const LodModel whole = load_model(path);
+  std::optional<LodModel> paged = open_paged_model(path, 1);
+  ASSERT_TRUE(paged) << path << " has no pages";
+  ASSERT_EQ(paged->vertices.size(), 0u);
+  TilesetOptions options;
+  options.tiles.max_triangles = kTileTriangles;
+  const fs::path base = scratch_folder("tiles_paged");
+  const TilesetReport from_whole = write_tileset(whole, (base / "whole").string(), options);
+  const TilesetReport from_pages = write_tileset(*paged, (base / "paged").string(), options);
+  EXPECT_EQ(from_pages.tiles, from_whole.tiles);
+  EXPECT_EQ(from_pages.bytes, from_whole.bytes);
+  EXPECT_GT(paged->clusters->paged->stats().pages_read, paged->clusters->paged->size());
+
+  const std::map<std::string, std::string> a = files_under(base / "whole"), b = files_under(base / "paged");
+  EXPECT_EQ(a.size(), from_whole.content_tiles + 1);
+  ASSERT_EQ(a.size(), b.size());
+  for (const auto& [name, bytes] : a) {
+    const auto other = b.find(name);
+    ASSERT_NE(other, b.end()) << name << " is missing from the paged model's tileset";
+    EXPECT_TRUE(bytes == other->second) << name << " differs (" << bytes.size() << " and " << other->second.size()
+                                        << " bytes)";
+  }
 }
 
 // A model with an origin (georeferenced inputs) gets it as the root's
