@@ -21,6 +21,12 @@
 namespace scan2lod::cli {
 namespace {
 
+// --structure: one of the structures, or "both".
+std::vector<std::string> with_both(std::vector<std::string> names) {
+  names.push_back("both");
+  return names;
+}
+
 struct Args {
   std::vector<std::string> inputs;
   std::string output;
@@ -85,7 +91,7 @@ void add_build_command(CLI::App& app) {
   cmd->add_option("--structure", args->structure,
                   "LOD structures to build: clusters (the cluster hierarchy), octree (the marching-cube octree) or "
                   "both. A mesh input's own triangles are the clusters' full detail.")
-      ->check(CLI::IsMember({"clusters", "octree", "both"}, CLI::ignore_case))
+      ->check(CLI::IsMember(with_both(structure_names()), CLI::ignore_case))
       ->default_str("both");
   cmd->add_option("--cluster-block", args->cluster_block,
                   "Triangles per block of the cluster hierarchy; with it the hierarchy is always built in blocks "

@@ -174,7 +174,7 @@ void add_export_command(CLI::App& app) {
                   "one file per level (bunny.ply -> bunny_LOD0.ply, ...)")
       ->required();
   cmd->add_option("--structure", args->structure, "clusters or octree (default: clusters when the model has them)")
-      ->transform(CLI::IsMember({"clusters", "octree"}, CLI::ignore_case));
+      ->transform(CLI::IsMember(structure_names(), CLI::ignore_case));
   CLI::Option* levels = cmd->add_option("--levels", args->percents,
                                         "Levels as percentages, e.g. 100,25,5,1 (the default); a repeated one is "
                                         "written once")

@@ -68,7 +68,7 @@ void add_extract_command(CLI::App& app) {
   cmd->add_flag("--no-quantize", args->no_quantize, "glTF: 32-bit float positions and normals");
   cmd->add_option("--structure", args->structure,
                   "clusters or octree (default: clusters when the model has them)")
-      ->check(CLI::IsMember({"clusters", "octree"}, CLI::ignore_case));
+      ->check(CLI::IsMember(structure_names(), CLI::ignore_case));
   CLI::Option* percent = cmd->add_option(
       "--percent", args->percent,
       "0 to 100: octree, the first P % of the LOD array; clusters, P % of the full triangle count (a warning "

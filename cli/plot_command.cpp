@@ -40,7 +40,7 @@ void add_plot_command(CLI::App& app) {
                                           "(default: log)");
   cmd->add_option("--structure", args->structure,
                   "LOD structure to plot: clusters or octree (default: clusters when the model has them)")
-      ->check(CLI::IsMember({"clusters", "octree"}));
+      ->check(CLI::IsMember(structure_names()));
   cmd->add_flag("--json", args->json, "Print the charts and measured levels as JSON");
   cmd->callback([args] {
     PlotOptions options;

@@ -37,7 +37,7 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--structure", args->structure,
                   "LOD structure to take the levels from: clusters or octree (default: clusters when the model "
                   "has them)")
-      ->check(CLI::IsMember({"clusters", "octree"}));
+      ->check(CLI::IsMember(structure_names()));
   cmd->add_option("--size", args->size, "Pixels per panel, WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--mode", args->mode, "shaded, wireframe, or both (wireframe beside shaded per level)")
       ->capture_default_str();

@@ -41,7 +41,7 @@ void add_view_command(CLI::App& app) {
   cmd->add_option("--structure", args->structure,
                   "A model's LOD structure to show: clusters (keys c, f, l: camera cut, freeze, DAG levels) or "
                   "octree (key o: cells); default: clusters when the model has them")
-      ->check(CLI::IsMember({"clusters", "octree"}));
+      ->check(CLI::IsMember(structure_names()));
   cmd->add_option("--compare", args->compare, "Level of the split view's right half (key v)")->capture_default_str();
   cmd->add_option("--size", args->size, "Window pixels, WIDTHxHEIGHT")->capture_default_str();
   CLI::Option* screenshot =

@@ -13,6 +13,10 @@ namespace scan2lod {
 
 const char* structure_name(LodStructure s) { return s == LodStructure::kOctree ? "octree" : "clusters"; }
 
+std::vector<std::string> structure_names() {
+  return {structure_name(LodStructure::kClusters), structure_name(LodStructure::kOctree)};
+}
+
 LodStructure default_structure(const LodModel& model) {
   return model.clusters ? LodStructure::kClusters : LodStructure::kOctree;
 }

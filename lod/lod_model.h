@@ -30,6 +30,9 @@ enum class LodStructure { kOctree, kClusters };
 
 // "octree" or "clusters", as the command line spells them.
 const char* structure_name(LodStructure s);
+// Every structure's name, in the order the command line offers them: what
+// its --structure options accept, so that a new structure is named here once.
+std::vector<std::string> structure_names();
 
 // The octree with its priority numbering. Its vertices live in the model's
 // VertexArray (tree.vertices is left empty there).
