@@ -15,7 +15,11 @@ cmake --install "$build_dir" --prefix "$scratch/prefix" >/dev/null
 # Every installed header, included as an application would.
 (cd "$scratch/prefix/include" && find scan2lod -name '*.h' | sort | sed 's/.*/#include <&>/') > "$scratch/every_header.cpp"
 [ -s "$scratch/every_header.cpp" ] || { echo "no headers installed" >&2; exit 1; }
+# The build's own compile and link flags: a library built under the sanitizer
+# preset links only into code built the same way.
+cached() { sed -n "s/^$1:STRING=//p" "$build_dir/CMakeCache.txt"; }
 cmake -S "$here" -B "$scratch/build" -DCMAKE_PREFIX_PATH="$scratch/prefix" -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_CXX_FLAGS="$(cached CMAKE_CXX_FLAGS)" -DCMAKE_EXE_LINKER_FLAGS="$(cached CMAKE_EXE_LINKER_FLAGS)" \
   -DEVERY_HEADER="$scratch/every_header.cpp" >/dev/null
 cmake --build "$scratch/build" -j 2 >/dev/null
 if ldd "$scratch/build/consumer" | grep -E -i "libpcl|libvtk|libOpen3D"; then
