@@ -25,9 +25,7 @@ ClusterTriangles ClusterGeometry::triangles(std::int32_t c) {
   }
   const std::size_t p = pages_->page_of(c);
   const PageGeometry& g = pages_->page(p);
-  // A page's triangles are its clusters' in order, from its first cluster's.
-  const std::uint32_t page_first = h.clusters[h.pages[p].first_cluster].first_triangle;
-  out.triangles = g.triangles.data() + (cl.first_triangle - page_first);
+  out.triangles = g.triangles.data() + (cl.first_triangle - pages_->first_triangle(p));
   out.positions = g.positions.data();
   if (!g.normals.empty()) out.normals = g.normals.data();
   if (!g.colors.empty()) out.colors = g.colors.data();

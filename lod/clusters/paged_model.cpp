@@ -159,7 +159,7 @@ void ClusterPages::emit(const ClusterHierarchy& h, const std::vector<std::int32_
     const PageGeometry& g = page(p);
     for (; i < selected.size() && page_of(selected[i]) == p; ++i) {
       const Cluster& cl = h.clusters[std::size_t(selected[i])];
-      const std::size_t first = cl.first_triangle - page_first_triangle_[p];
+      const std::size_t first = cl.first_triangle - first_triangle(p);
       for (std::size_t t = first; t < first + cl.triangle_count; ++t) {
         Triangle out;
         for (int k = 0; k < 3; ++k) {

@@ -45,6 +45,9 @@ class ClusterPages {
   const PageExtent& extent(std::size_t p) const { return extents_[p]; }
   // The page holding cluster `c`.
   std::size_t page_of(std::int32_t c) const;
+  // Where page `p`'s triangles start in the hierarchy's numbering: cluster c's
+  // lie in its page from c.first_triangle - first_triangle(page_of(c)) on.
+  std::uint32_t first_triangle(std::size_t p) const { return page_first_triangle_[p]; }
   bool resident(std::size_t p) const { return slots_[p] >= 0; }
 
   // Page `p`'s geometry, read from the file unless held, after dropping the
