@@ -143,6 +143,9 @@ void build(Args* args, WorkSharing* job) {
                      {"widest_halo", report.bricks.widest_halo}};
     if (report.cluster_block > 0) j["cluster_block"] = report.cluster_block;
     if (report.cluster_lanes > 0) j["cluster_lanes"] = report.cluster_lanes;
+    if (report.cluster_blocks.blocks > 0)
+      j["cluster_blocks"] = {{"made", report.cluster_blocks.blocks}, {"here", report.cluster_blocks.blocks_here},
+                             {"exchanged_mib", report.cluster_blocks.bytes_exchanged / double(1 << 20)}};
     const double mib = 1 << 20;
     j["memory_mib"] = {{"budget", report.budget_bytes / mib},
                        {"estimated", {{"in_core_reconstruction", report.estimated_bytes / mib},

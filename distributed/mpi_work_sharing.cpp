@@ -112,12 +112,16 @@ class MpiWorkSharing final : public WorkSharing {
 
   void broadcast(std::string* bytes) override {
     std::uint64_t size = bytes->size();
-    MPI_Request request;
-    MPI_Ibcast(&size, 1, MPI_UINT64_T, 0, comm_, &request);
-    wait(&request);
+    broadcast_from(0, &size, sizeof size);
     if (rank_ != 0) bytes->assign(size, '\0');
+    broadcast_from(0, bytes->data(), size);
+  }
+
+  void broadcast_from(int root, void* data, std::size_t size) override {
+    char* bytes = static_cast<char*>(data);
+    MPI_Request request;
     for (std::size_t at = 0; at < size; at += kPiece) {
-      MPI_Ibcast(bytes->data() + at, int(std::min<std::size_t>(kPiece, size - at)), MPI_BYTE, 0, comm_, &request);
+      MPI_Ibcast(bytes + at, int(std::min<std::size_t>(kPiece, size - at)), MPI_BYTE, root, comm_, &request);
       wait(&request);
     }
   }

@@ -23,6 +23,7 @@ class SerialWorkSharing final : public WorkSharing {
   }
   std::vector<std::string> gather_all(const std::string& mine) override { return {mine}; }
   void broadcast(std::string*) override {}
+  void broadcast_from(int, void*, std::size_t) override {}
   [[noreturn]] void abort(int exit_code) override { std::exit(exit_code); }
 };
 

@@ -45,6 +45,11 @@ class WorkSharing {
   // the others).
   virtual void broadcast(std::string* bytes) = 0;
 
+  // Collective: rank `root`'s `size` bytes at `data` on every rank, written
+  // over the others' `data` (which every rank has sized alike). For arrays
+  // too large to copy into a message first (a mesh's vertices).
+  virtual void broadcast_from(int root, void* data, std::size_t size) = 0;
+
   // Ends every rank of the job with `exit_code`. The caller has printed why.
   [[noreturn]] virtual void abort(int exit_code) = 0;
 };

@@ -6,6 +6,7 @@
 #include <scan2lod/distributed/message.h>
 #include <scan2lod/distributed/work_sharing.h>
 #include <scan2lod/io/mesh_file.h>
+#include <scan2lod/lod/clusters/hierarchy_ranks.h>
 #include <scan2lod/lod/clusters/triangle_spool.h>
 #include <scan2lod/lod/octree/lod_array.h>
 #include <scan2lod/lod/octree/mc_octree.h>
@@ -389,6 +390,8 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
     ClusterOptions clusters;
     clusters.threads = options.reconstruct.threads;
     clusters.block_triangles = report.cluster_block;
+    clusters.sharing = options.sharing;  // the other ranks make blocks too
+    clusters.stats = &report.cluster_blocks;
     // Finished clusters go to a spool on disk only where memory cannot hold
     // them too: writing them cost 4 % of an in-core build's cluster stage.
     const bool blocked = report.cluster_block > 0 && report.full_triangles > std::size_t(report.cluster_block);
@@ -426,6 +429,8 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
       add_cluster_hierarchy(&model, std::move(r.mesh), false, clusters);
     }
     bar.finish();
+  } else {
+    release_hierarchy_ranks(options.sharing);
   }
   report.seconds_clusters = seconds_since(stage);
   report.peak_bytes_clusters = peak_bytes();
@@ -452,6 +457,8 @@ void serve_build(const std::vector<std::string>& inputs, const BuildOptions& opt
   } else {
     serve_bricks(options.reconstruct, bricks);
   }
+  points.release();
+  serve_cluster_hierarchy(*options.sharing, options.reconstruct.threads);
 }
 
 LodModel build_model(const OrientedPoints& points, const TriangleMesh* mesh, const BuildOptions& options,

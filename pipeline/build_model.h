@@ -57,6 +57,7 @@ struct BuildReport {
   double estimated_cluster_bytes = 0;  // the stage's peak: in core, or in blocks (then the process's)
   std::int64_t cluster_block = 0;  // triangles per block of the hierarchy; 0: built in core
   int cluster_lanes = 0;           // blocks of a pass run side by side (ClusterOptions::lanes)
+  ClusterBuildStats cluster_blocks;  // blocks made, here and on the other ranks
   double peak_bytes_reconstruct = 0, peak_bytes_octree = 0, peak_bytes_clusters = 0;
   std::size_t full_triangles = 0;  // the reconstruction's (or the mesh input's)
   // Wall-clock seconds per stage; the octree's build is seconds_octree, of

@@ -165,6 +165,30 @@ TEST(DistributedBuild, RanksThatBinTheirOwnSharesWriteTheSingleProcessModel) {
   }
 }
 
+TEST(DistributedBuild, RanksThatMakeTheHierarchysBlocksWriteTheSingleProcessModel) {
+  // Blocks of 16 k triangles: the bunny's hierarchy in about 10 blocks at
+  // first, each pass's blocks made on every rank and committed everywhere.
+  const std::string blocks = " --cluster-block 16384";
+  const Alone& alone = single_process_model_with(blocks, "alone_blocks");
+  ASSERT_FALSE(alone.bytes.empty());
+  for (int ranks : {2, 3}) {
+    const std::string name = "blocks" + std::to_string(ranks);
+    const fs::path dir = fresh_dir(name);
+    const CliRun r = run_shell(build_command(ranks, dir, name, blocks) + " 2>&1");
+    ASSERT_EQ(r.status, 0) << r.output;
+    const nlohmann::json j = json_of(r);
+    ASSERT_FALSE(j.is_discarded()) << r.output;
+    const std::size_t made = j.value("/cluster_blocks/made"_json_pointer, std::size_t(0));
+    const std::size_t here = j.value("/cluster_blocks/here"_json_pointer, made);
+    EXPECT_GE(made, 8u) << r.output;
+    // Rank 0 made its share of each pass (block b is rank b mod N's), not all of them.
+    EXPECT_GE(here, made / std::size_t(ranks)) << r.output;
+    EXPECT_LE(here, made / std::size_t(ranks) + 8) << r.output;
+    EXPECT_GT(j.value("/cluster_blocks/exchanged_mib"_json_pointer, 0.0), 1.0) << r.output;
+    EXPECT_TRUE(bytes_of(dir / (name + ".mco")) == alone.bytes) << ranks << " ranks";
+  }
+}
+
 TEST(DistributedBuild, AJobWithAKilledRankResumesToTheSameModel) {
   // The ranks bin their own shares: the path of inputs larger than memory.
   const std::string& alone = single_process_model_in_shares().bytes;

@@ -3,9 +3,11 @@
 #include <scan2lod/core/error.h>
 #include <scan2lod/core/morton.h>
 #include <scan2lod/core/sort_on_cores.h>
+#include <scan2lod/distributed/work_sharing.h>
 #include <scan2lod/lod/clusters/cluster_partition.h>
 #include <scan2lod/lod/clusters/group_clustering.h>
 #include <scan2lod/lod/clusters/group_simplify.h>
+#include <scan2lod/lod/clusters/hierarchy_ranks.h>
 #include <scan2lod/lod/clusters/paged_model.h>
 #include <scan2lod/lod/clusters/triangle_spool.h>
 
@@ -18,6 +20,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <numeric>
@@ -355,6 +358,12 @@ struct Shared {
   SimplifyInput input;
   float error_floor = 0;
   double simplified = 0, expected = 1;
+  // A job of several ranks (hierarchy_ranks.h), or null. Ranks other than 0
+  // keep no finished clusters: only their groups' count, which numbers the
+  // groups of the blocks that follow.
+  WorkSharing* job = nullptr;
+  bool keeps_clusters = true;
+  ClusterBuildStats stats;
 
   Shared() = default;
   Shared(const Shared&) = delete;  // the views point into it
@@ -608,8 +617,9 @@ void run_rounds(Shared& s, Lane& lane, Block* b, int rounds = 255, bool top = fa
 // Phase 4: a block's finished clusters (those with a parent, or all of them
 // when `last`) into `out`, its groups numbered on from out's; the others
 // become seeds of `carried`, to be grouped across the block's border in the
-// next pass.
-void write_block(Block& b, bool last, ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
+// next pass. Without `keep`, finished clusters are dropped (a rank that
+// only makes blocks for rank 0).
+void write_block(Block& b, bool last, bool keep, ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
   const std::int32_t offset = std::int32_t(out->groups.size());
   out->groups.insert(out->groups.end(), b.h.groups.begin(), b.h.groups.end());
   auto global = [offset](std::int32_t local) { return local < 0 ? local : local + offset; };
@@ -621,6 +631,7 @@ void write_block(Block& b, bool last, ClusterHierarchy* out, Block* carried, Tri
       add_seed(b, c, carried);
       continue;
     }
+    if (!keep) continue;
     const Triangle* from = &b.h.triangles[cl.first_triangle];
     if (spool) {
       cl.first_triangle = std::uint32_t(spool->size());
@@ -780,7 +791,200 @@ void commit_block(Shared& s, Block& b, ClusterHierarchy* out, Block* carried, Tr
   s.simplified += b.simplified;
   b.simplified = 0;
   if (s.options->progress) s.options->progress(std::min(1.0, s.simplified / s.expected));
-  write_block(b, false, out, carried, spool);
+  write_block(b, false, s.keeps_clusters, out, carried, spool);
+}
+
+// ---- blocks sent between ranks --------------------------------------------
+
+// Both ends run the same binary, so arrays travel as they lie in memory
+// (Eigen's vectors are plain floats, though not trivially copyable by the
+// standard's rule).
+template <class T>
+void pack(std::string* out, const std::vector<T>& v) {
+  const std::uint64_t n = v.size();
+  out->append(reinterpret_cast<const char*>(&n), sizeof n);
+  out->append(reinterpret_cast<const char*>(v.data()), n * sizeof(T));
+}
+template <class T>
+void pack_value(std::string* out, const T& value) {
+  static_assert(std::is_trivially_copyable_v<T>, "values travel as they lie in memory");
+  out->append(reinterpret_cast<const char*>(&value), sizeof value);
+}
+
+class Unpacker {
+ public:
+  explicit Unpacker(const std::string& bytes) : bytes_(bytes) {}
+  template <class T>
+  void get(std::vector<T>* v) {
+    std::uint64_t n = 0;
+    get_value(&n);
+    if (n > (bytes_.size() - at_) / sizeof(T)) throw std::runtime_error("a block sent between ranks is cut short");
+    v->resize(n);
+    std::memcpy(static_cast<void*>(v->data()), take(n * sizeof(T)), n * sizeof(T));
+  }
+  template <class T>
+  void get_value(T* value) {
+    std::memcpy(value, take(sizeof(T)), sizeof(T));
+  }
+
+ private:
+  const char* take(std::size_t n) {
+    if (n > bytes_.size() - at_) throw std::runtime_error("a block sent between ranks is cut short");
+    const char* p = bytes_.data() + at_;
+    at_ += n;
+    return p;
+  }
+  const std::string& bytes_;
+  std::size_t at_ = 0;
+};
+
+std::string packed_block(const Block& b) {
+  std::string out;
+  pack(&out, b.h.clusters), pack(&out, b.h.triangles), pack(&out, b.h.groups);
+  pack(&out, b.sphere), pack(&out, b.own_error), pack(&out, b.active);
+  pack_value(&out, std::uint64_t(b.seeds)), pack_value(&out, std::int32_t(b.round)), pack_value(&out, b.simplified);
+  pack_value(&out, std::uint64_t(b.held.size()));
+  for (const HeldPlaced& p : b.held) {
+    pack_value(&out, p.first), pack_value(&out, p.end);
+    pack(&out, p.positions), pack(&out, p.normals), pack(&out, p.colors);
+  }
+  return out;
+}
+
+Block unpacked_block(const std::string& bytes) {
+  Unpacker in(bytes);
+  Block b;
+  in.get(&b.h.clusters), in.get(&b.h.triangles), in.get(&b.h.groups);
+  in.get(&b.sphere), in.get(&b.own_error), in.get(&b.active);
+  std::uint64_t seeds = 0, held = 0;
+  std::int32_t round = 0;
+  in.get_value(&seeds), in.get_value(&round), in.get_value(&b.simplified);
+  b.seeds = std::size_t(seeds), b.round = round;
+  in.get_value(&held);
+  b.held.resize(std::size_t(held));
+  for (HeldPlaced& p : b.held) {
+    in.get_value(&p.first), in.get_value(&p.end);
+    in.get(&p.positions), in.get(&p.normals), in.get(&p.colors);
+  }
+  return b;
+}
+
+// Rank `root`'s bytes on every rank.
+void broadcast_bytes(WorkSharing& job, int root, std::string* bytes) {
+  std::uint64_t size = bytes->size();
+  job.broadcast_from(root, &size, sizeof size);
+  if (job.rank() != root) bytes->assign(std::size_t(size), '\0');
+  job.broadcast_from(root, bytes->data(), bytes->size());
+}
+
+// A pass's blocks across the ranks of a job: rank b mod N makes block b, on
+// its lanes (a thread each, or one lane with every thread), at most a few
+// blocks ahead of the commits; the main thread commits every block in block
+// order, its own and those the others send, and is the only thread that
+// talks to the other ranks. Every rank thus ends the pass with the same
+// tables, clusters carried and group count; blocks are made as lanes make
+// them in one process (placed vertices held back), so the numbers are the
+// single process's.
+template <class Make>
+void blocks_across_ranks(Shared& s, Lane& main, std::size_t blocks, std::size_t pass_triangles, Make make,
+                         ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
+  WorkSharing& job = *s.job;
+  const std::size_t ranks = std::size_t(job.ranks()), rank = std::size_t(job.rank());
+  std::vector<std::size_t> own;
+  for (std::size_t b = rank; b < blocks; b += ranks) own.push_back(b);
+  s.stats.blocks_here += own.size();
+  const int asked = s.options->lanes > 0 ? std::min(s.options->lanes, main.threads) : main.threads;
+  const std::size_t lane_count = std::min<std::size_t>(std::size_t(std::max(asked, 1)), own.size());
+  const std::size_t room = 3 * pass_triangles;
+  s.weld.reserve(s.weld.size() + room);
+  s.locked.reserve(s.locked.size() + room);
+  s.vertex_group.reserve(s.vertex_group.size() + room);
+  s.added_positions.reserve(s.added_positions.size() + room);
+  if (!s.input.normals.empty()) s.added_normals.reserve(s.added_normals.size() + room);
+  if (!s.input.colors.empty()) s.added_colors.reserve(s.added_colors.size() + room);
+  std::vector<std::vector<std::int32_t>> own_marks(lane_count > 0 ? lane_count - 1 : 0);
+  std::vector<Lane> lanes(lane_count);
+  for (std::size_t l = 0; l < lane_count; ++l) {
+    Lane& lane = lanes[l];
+    lane.threads = lane_count == 1 ? main.threads : 1;
+    lane.holds_placed = true;
+    lane.input = s.input;
+    lane.input.positions = s.input.positions.frozen();
+    lane.input.normals = s.input.normals.frozen();
+    lane.input.colors = s.input.colors.frozen();
+    if (l == 0) {
+      lane.marks = main.marks;
+    } else {
+      own_marks[l - 1].assign(s.vertex_group.size(), -1);
+      lane.marks = &own_marks[l - 1];
+    }
+  }
+  const std::size_t window = 2 * std::max<std::size_t>(lane_count, 1);
+  std::vector<Block> finished(own.size());
+  std::vector<std::uint8_t> ready(own.size(), 0);
+  std::size_t next_own = 0, committed_own = 0;
+  std::exception_ptr failure;
+  std::mutex mutex;
+  std::condition_variable changed;
+  auto run = [&](Lane& lane) {
+    for (;;) {
+      std::size_t i;
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        changed.wait(lock, [&] { return failure || next_own >= own.size() || next_own < committed_own + window; });
+        if (failure || next_own >= own.size()) return;
+        i = next_own++;
+      }
+      try {
+        Block one = make(lane, own[i]);
+        std::lock_guard<std::mutex> lock(mutex);
+        finished[i] = std::move(one);
+        ready[i] = 1;
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!failure) failure = std::current_exception();
+      }
+      changed.notify_all();
+    }
+  };
+  std::vector<std::thread> threads;
+  for (Lane& lane : lanes) threads.emplace_back(run, std::ref(lane));
+  try {
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const int maker = int(b % ranks);
+      std::string bytes;
+      Block one;
+      if (std::size_t(maker) == rank) {
+        const std::size_t i = b / ranks;
+        {
+          std::unique_lock<std::mutex> lock(mutex);
+          changed.wait(lock, [&] { return failure || ready[i]; });
+          if (failure) std::rethrow_exception(failure);
+          one = std::move(finished[i]);
+        }
+        bytes = packed_block(one);
+      }
+      broadcast_bytes(job, maker, &bytes);
+      s.stats.bytes_exchanged += double(bytes.size());
+      if (std::size_t(maker) != rank) one = unpacked_block(bytes);
+      bytes = std::string();
+      commit_block(s, one, out, carried, spool);
+      if (std::size_t(maker) == rank) {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++committed_own;
+      }
+      changed.notify_all();
+    }
+  } catch (...) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!failure) failure = std::current_exception();
+    }
+    changed.notify_all();
+    for (std::thread& t : threads) t.join();
+    throw;
+  }
+  for (std::thread& t : threads) t.join();
 }
 
 // One round of every block of a pass: `make(lane, b)` makes block b's.
@@ -794,6 +998,9 @@ void commit_block(Shared& s, Block& b, ClusterHierarchy* out, Block* carried, Tr
 template <class Make>
 void blocks_side_by_side(Shared& s, Lane& main, std::size_t blocks, std::size_t pass_triangles, Make make,
                          ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
+  s.stats.blocks += blocks;
+  if (s.job && s.job->ranks() > 1) return blocks_across_ranks(s, main, blocks, pass_triangles, make, out, carried, spool);
+  s.stats.blocks_here += blocks;
   const int asked = s.options->lanes > 0 ? std::min(s.options->lanes, main.threads) : main.threads;
   const std::size_t lane_count = std::min<std::size_t>(std::size_t(std::max(asked, 1)), blocks);
   if (lane_count <= 1) {
@@ -883,7 +1090,7 @@ ClusterHierarchy build_in_blocks(Shared& s, Lane& main, std::vector<Triangle> tr
   // The first round keeps about two thirds, each later one about half: the
   // hierarchy holds about 2.3 times the full detail. Reserved, so that
   // growth never doubles it.
-  if (!spool) out.triangles.reserve(std::size_t(2.4 * double(triangles.size())) + 4096);
+  if (!spool && s.keeps_clusters) out.triangles.reserve(std::size_t(2.4 * double(triangles.size())) + 4096);
   Block carried;
   int round = 1;
   {
@@ -907,9 +1114,10 @@ ClusterHierarchy build_in_blocks(Shared& s, Lane& main, std::vector<Triangle> tr
     const std::size_t left = carried.h.triangles.size();
 
     if (left <= block || carried.h.clusters.size() <= std::size_t(options.group_clusters) || round >= 254) {
+      if (!s.keeps_clusters) return out;  // the rounds to the top run on rank 0 alone
       carried.round = round;
       run_rounds(s, main, &carried, 255, true);
-      write_block(carried, true, &out, nullptr, spool);
+      write_block(carried, true, true, &out, nullptr, spool);
       out.spool = options.spool;
       return out;
     }
@@ -1013,16 +1221,11 @@ std::int64_t block_triangles_for(std::int64_t options_block, std::size_t triangl
   return block > 0 && std::int64_t(triangles) > block ? block : 0;
 }
 
-ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
-                                         ArrayView<Rgb> colors, std::vector<Triangle> triangles,
-                                         const ClusterOptions& options) {
-  if (triangles.empty()) throw InputError("", "the cluster hierarchy needs a mesh with triangles, got none");
-  for (const Triangle& t : triangles)
-    for (std::int32_t v : t)
-      if (v < 0 || std::size_t(v) >= positions.size())
-        throw InputError("", "a triangle names vertex " + std::to_string(v) + " of " +
-                                 std::to_string(positions.size()));
-  Shared s;
+namespace {
+
+// Phase 0: the tables every block reads, and the lane that runs alone.
+void prepare(Shared& s, Lane& main, ArrayView<Vec3f> positions, ArrayView<Vec3f> normals, ArrayView<Rgb> colors,
+             const ClusterOptions& options, std::size_t triangles) {
   s.positions = JoinedView<Vec3f>(positions, &s.added_positions);
   s.options = &options;
   s.threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
@@ -1038,15 +1241,107 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
   s.locked.assign(positions.size(), 0);
   s.input.locked = &s.locked;
   s.vertex_group.assign(positions.size(), -1);
-  Lane main;
   main.threads = s.threads;
   main.marks = &s.vertex_group;
   main.input = s.input;
   s.error_floor = 1e-7f * std::max(diagonal, 1e-30f);
-  s.expected = 2.0 * double(triangles.size());
+  s.expected = 2.0 * double(triangles);
+}
+
+// What rank 0 sends the other ranks before a blocked build: the options
+// that shape the hierarchy, and the sizes of the arrays that follow.
+struct HierarchyStart {
+  std::uint64_t blocked = 0;  // 0: no blocks to share, the others return
+  std::uint64_t positions = 0, normals = 0, colors = 0, triangles = 0;
+  std::int64_t block_triangles = 0;
+  std::int32_t cluster_triangles = 0, group_clusters = 0, lanes = 0, optimal_placement = 0;
+  double reduction = 0, first_reduction = 0, stall = 0;
+  float normal_weight = 0, color_weight = 0;
+};
+
+template <class T>
+void broadcast_array(WorkSharing& job, T* data, std::size_t count) {
+  job.broadcast_from(0, static_cast<void*>(data), count * sizeof(T));
+}
+
+}  // namespace
+
+void release_hierarchy_ranks(WorkSharing* job) {
+  if (!job || job->ranks() == 1 || job->rank() != 0) return;
+  HierarchyStart none;
+  job->broadcast_from(0, &none, sizeof none);
+}
+
+void serve_cluster_hierarchy(WorkSharing& job, int threads) {
+  HierarchyStart start;
+  job.broadcast_from(0, &start, sizeof start);
+  if (!start.blocked) return;
+  std::vector<Vec3f> positions(start.positions), normals(start.normals);
+  std::vector<Rgb> colors(start.colors);
+  std::vector<Triangle> triangles(start.triangles);
+  broadcast_array(job, positions.data(), positions.size());
+  broadcast_array(job, normals.data(), normals.size());
+  broadcast_array(job, colors.data(), colors.size());
+  broadcast_array(job, triangles.data(), triangles.size());
+  ClusterOptions options;
+  options.cluster_triangles = start.cluster_triangles;
+  options.group_clusters = start.group_clusters;
+  options.reduction = start.reduction;
+  options.first_reduction = start.first_reduction;
+  options.stall = start.stall;
+  options.normal_weight = start.normal_weight;
+  options.color_weight = start.color_weight;
+  options.optimal_placement = start.optimal_placement != 0;
+  options.threads = threads;
+  options.block_triangles = start.block_triangles;
+  options.lanes = start.lanes;
+  options.sharing = &job;
+  Shared s;
+  Lane main;
+  prepare(s, main, positions, normals, colors, options, triangles.size());
+  s.job = &job;
+  s.keeps_clusters = false;
+  build_in_blocks(s, main, std::move(triangles), start.block_triangles);
+}
+
+ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<Vec3f> normals,
+                                         ArrayView<Rgb> colors, std::vector<Triangle> triangles,
+                                         const ClusterOptions& options) {
+  if (triangles.empty()) throw InputError("", "the cluster hierarchy needs a mesh with triangles, got none");
+  for (const Triangle& t : triangles)
+    for (std::int32_t v : t)
+      if (v < 0 || std::size_t(v) >= positions.size())
+        throw InputError("", "a triangle names vertex " + std::to_string(v) + " of " +
+                                 std::to_string(positions.size()));
+  Shared s;
+  Lane main;
+  prepare(s, main, positions, normals, colors, options, triangles.size());
+  const std::int64_t blocked = block_triangles_for(options.block_triangles, triangles.size());
+  if (options.sharing && options.sharing->ranks() > 1) {
+    HierarchyStart start;
+    start.blocked = blocked > 0;
+    start.positions = positions.size(), start.normals = normals.size(), start.colors = colors.size();
+    start.triangles = triangles.size();
+    start.block_triangles = blocked;
+    start.cluster_triangles = options.cluster_triangles, start.group_clusters = options.group_clusters;
+    start.lanes = options.lanes, start.optimal_placement = options.optimal_placement;
+    start.reduction = options.reduction, start.first_reduction = options.first_reduction, start.stall = options.stall;
+    start.normal_weight = options.normal_weight, start.color_weight = options.color_weight;
+    WorkSharing& job = *options.sharing;
+    job.broadcast_from(0, &start, sizeof start);
+    if (blocked) {
+      broadcast_array(job, const_cast<Vec3f*>(positions.data()), positions.size());
+      broadcast_array(job, const_cast<Vec3f*>(normals.data()), normals.size());
+      broadcast_array(job, const_cast<Rgb*>(colors.data()), colors.size());
+      broadcast_array(job, triangles.data(), triangles.size());
+      s.job = &job;
+      s.stats.bytes_exchanged = double(positions.size() * sizeof(Vec3f) + normals.size() * sizeof(Vec3f) +
+                                       colors.size() * sizeof(Rgb) + triangles.size() * sizeof(Triangle));
+    }
+  }
 
   ClusterHierarchy h;
-  if (const std::int64_t block = block_triangles_for(options.block_triangles, triangles.size())) {
+  if (const std::int64_t block = blocked) {
     h = build_in_blocks(s, main, std::move(triangles), block);
   } else {
     // In core: the whole mesh is one block.
@@ -1073,6 +1368,7 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
   h.added_positions = std::move(s.added_positions);
   h.added_normals = std::move(s.added_normals);
   h.added_colors = std::move(s.added_colors);
+  if (options.stats) *options.stats = s.stats;
   if (options.progress) options.progress(1.0);
   return h;
 }

@@ -30,7 +30,7 @@ namespace scan2lod {
 
 class TriangleSpool;
 class ClusterPages;
-class ClusterPages;
+class WorkSharing;
 
 // A bounding sphere and the object-space error of the simplification that
 // made a group (Hausdorff-like: the largest quadric distance of its
@@ -107,6 +107,13 @@ constexpr std::int64_t kAutomaticBlocks = -1;
 // of `triangles`: 0 when it is built whole.
 std::int64_t block_triangles_for(std::int64_t options_block, std::size_t triangles);
 
+// What a build in blocks did, for reports.
+struct ClusterBuildStats {
+  std::size_t blocks = 0;       // made in the passes in blocks (the rounds to the top not counted)
+  std::size_t blocks_here = 0;  // of them, made by this process (all of them without ClusterOptions::sharing)
+  double bytes_exchanged = 0;   // sent to and received from the other ranks: the mesh, then blocks
+};
+
 struct ClusterOptions {
   int cluster_triangles = 128;   // most triangles per cluster
   int group_clusters = 32;       // clusters per group, about (8 and 16 stall on the bunny: bench/lod)
@@ -146,6 +153,13 @@ struct ClusterOptions {
   // With block_triangles: finished clusters' triangles go here as each block
   // ends, not to memory (ClusterHierarchy::spool).
   std::shared_ptr<TriangleSpool> spool;
+  // In blocks, on rank 0 of a job of several ranks: the blocks of each pass
+  // are made on every rank, the other ranks serving in
+  // serve_cluster_hierarchy() (lod/clusters/hierarchy_ranks.h). The model is
+  // the same at any number of ranks. Null: this process alone.
+  WorkSharing* sharing = nullptr;
+  // Filled when not null.
+  ClusterBuildStats* stats = nullptr;
   // Called with the share of the triangles simplified so far (0 to 1); may be empty.
   std::function<void(double)> progress;
 };
