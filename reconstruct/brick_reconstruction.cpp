@@ -14,6 +14,7 @@
 #include <scan2lod/reconstruct/resolution_guard.h>
 #include <scan2lod/reconstruct/signed_distance.h>
 #include <scan2lod/reconstruct/welded_surface.h>
+#include <scan2lod/spatial/points_near.h>
 #include <scan2lod/spatial/point_index.h>
 
 #include <fcntl.h>
@@ -31,6 +32,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <memory>
 #include <unordered_map>
 #include <numeric>
@@ -514,8 +516,10 @@ void bin_points(const PointSource& points, const BrickPlan& plan, const Reconstr
 }
 
 // A brick's points with its halo, in their input order: read from its
-// neighbours' runs a buffer at a time, and kept when inside.
-OrientedPoints gather(const Bins& bins, const BrickPlan& plan, std::uint32_t brick, double halo) {
+// neighbours' runs a buffer at a time, and kept when inside (and `near` the
+// queries, when given).
+OrientedPoints gather(const Bins& bins, const BrickPlan& plan, std::uint32_t brick, double halo,
+                      const QueryNeighbourhood* near = nullptr) {
   const int n = plan.bricks_per_axis, B = plan.brick_cubes;
   const int b[3] = {int(brick) % n, int(brick) / n % n, int(brick) / (n * n)};
   const double side = plan.grid.cube_size * B;
@@ -546,7 +550,9 @@ OrientedPoints gather(const Bins& bins, const BrickPlan& plan, std::uint32_t bri
           const std::size_t records = std::size_t(got) / sizeof(PointRecord);
           for (std::size_t j = 0; j < records; ++j) {
             const Vec3d p = buffer[j].position.cast<double>();
-            if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) kept.push_back(buffer[j]);
+            if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all() &&
+                (!near || near->near(buffer[j].position)))
+              kept.push_back(buffer[j]);
           }
           k += records;
         }
@@ -592,16 +598,19 @@ std::string brick_path(const std::string& dir, std::uint32_t brick) {
   return (fs::path(dir) / name).string();
 }
 
-// Runs work(points, index) over a brick's points and a halo that starts at
+// Runs work(points) over a brick's points and a halo that starts at
 // `halo` and widens to what the work reports it needed (the radius within
 // which every point that decided one of its values lies), which then
-// suffices. `far`: no point outside reaches farther into the brick. Returns
-// the runs it took.
+// suffices. `far`: no point outside reaches farther into the brick. With
+// `queries`, only the points within the halo of one of them are gathered:
+// those are all a value that holds can depend on. Returns the runs it took.
 template <class Work>
 std::size_t with_brick_points(const Bins& bins, const BrickPlan& plan, std::uint32_t brick, double halo, double far,
-                              Work work, double* widest) {
+                              Work work, double* widest, const std::vector<Vec3f>* queries = nullptr) {
   for (std::size_t runs = 1;; ++runs) {
-    const OrientedPoints sub = gather(bins, plan, brick, halo);
+    std::optional<QueryNeighbourhood> near;
+    if (queries) near.emplace(*queries, halo);
+    const OrientedPoints sub = gather(bins, plan, brick, halo, near ? &*near : nullptr);
     *widest = std::max(*widest, halo);
     if (sub.size() == 0 && halo < far) {
       halo = std::min(far, 2 * halo);
@@ -970,7 +979,7 @@ Reconstruction bricks_from(const PointSource& points, const ReconstructOptions& 
   if (!first_rank) return result;  // rank 0 welds
 
   // Phase 4: the bricks welded by lattice edge, and cleaned up as in core.
-  WeldedSurface surface(plan.grid);
+  WeldedSurface surface(plan.grid, options.threads);
   {
     std::size_t vertices = 0, leaves = 0, triangles = 0;
     bool colored = false;
@@ -1023,7 +1032,7 @@ Reconstruction bricks_from(const PointSource& points, const ReconstructOptions& 
           widest = std::max(widest, double(std::isnan(d[j]) ? std::min(needed[j], bins.relaxed_far(brick)) : needed[j]));
         }
         return widest;
-      }, &bs.widest_halo);
+      }, &bs.widest_halo, &queries);
     }
   };
   stats.triangles_dropped += surface.drop_small_pieces(options.min_piece);
@@ -1062,7 +1071,7 @@ Reconstruction bricks_from(const PointSource& points, const ReconstructOptions& 
         const std::vector<Rgb> c = vertex_colors(sub, index, at, h, options.threads, &needed);
         for (std::size_t j = 0; j < members.size(); ++j) mesh.colors[members[j]] = c[j];
         return double(*std::max_element(needed.begin(), needed.end()));
-      }, &bs.widest_halo);
+      }, &bs.widest_halo, &at);
     }
   }
   TriangleMesh compact = compact_mesh(mesh.positions, {}, mesh.colors, {&mesh.triangles});

@@ -27,7 +27,9 @@ using CornerEvaluator = std::function<void(const std::vector<std::uint64_t>& cor
 
 class WeldedSurface {
  public:
-  explicit WeldedSurface(const CubeGrid& grid) : grid_(grid), h_(float(grid.cube_size)) {}
+  // `threads`: for the sorts and scans of the whole surface (0: every core);
+  // the surface is the same on any count.
+  explicit WeldedSurface(const CubeGrid& grid, int threads = 0);
 
   // Room for the bricks' shares, counted before they are added: growth by
   // doubling held up to twice the surface.
@@ -73,7 +75,7 @@ class WeldedSurface {
   void for_each_triangle(std::int32_t leaf, Visit visit) const;
   bool emitting(std::uint64_t cube) const;
   bool neighbour_key(std::uint64_t cube, int face, std::uint64_t* key) const;
-  void append_open_edges(std::int32_t leaf);
+  void append_open_edges(std::int32_t leaf, std::vector<OpenEdge>* out) const;
   void find_open_edges();
   // Open edges change only at changed leaves, at live neighbours of dead
   // ones, and at leaves that had open edges: only those are looked at.
@@ -83,6 +85,7 @@ class WeldedSurface {
 
   CubeGrid grid_;
   float h_;
+  int threads_ = 1;
   // Vertices: sorted unique lattice edges after weld(); growth appends.
   std::vector<std::uint64_t> vertex_edge_;
   std::vector<Vec3f> positions_;
