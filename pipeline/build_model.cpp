@@ -458,6 +458,7 @@ void serve_build(const std::vector<std::string>& inputs, const BuildOptions& opt
     serve_bricks(options.reconstruct, bricks);
   }
   points.release();
+  malloc_trim(0);  // what the bricks freed, before the mesh and the hierarchy's tables come
   serve_cluster_hierarchy(*options.sharing, options.reconstruct.threads);
 }
 
