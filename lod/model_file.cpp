@@ -21,6 +21,7 @@
 #include <memory>
 #include <stdexcept>
 #include <system_error>
+#include <thread>
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -319,6 +320,56 @@ void for_each_page(const ClusterHierarchy& h,
   });
 }
 
+// One page's encoding, as encode_pages() hands it over.
+struct EncodedPage {
+  std::size_t page = 0;
+  std::vector<Triangle> triangles;  // its triangles, copied: the spool's are gone after the visit
+  std::vector<std::uint8_t> blob;
+  Aabb box;
+  std::uint64_t checksum = 0;
+  bool encoded = false;
+};
+
+// Calls visit(page) for every page in order, encoded (PageEncoder), with its
+// checksum. Pages are encoded a batch at a time on every core: encoding was
+// 62 % and the pages' checksums 12 % of saving a 13 M-triangle model, on one
+// core. Returns false, having stopped, when a page cannot be encoded.
+bool encode_pages(const ClusterHierarchy& h, const VertexArray& vertices,
+                  const std::function<void(const EncodedPage&)>& visit) {
+  const std::size_t threads = std::max(1u, std::thread::hardware_concurrency());
+  std::vector<EncodedPage> batch(8 * threads);  // reused: a fresh one each batch was page faults
+  std::vector<PageEncoder> encoders(threads);
+  std::size_t held = 0;
+  bool ok = true;
+  auto flush = [&] {
+    auto work = [&](std::size_t t) {
+      for (std::size_t i = t; i < held; i += threads) {
+        EncodedPage& e = batch[i];
+        e.encoded = encoders[t].encode(e.triangles.data(), e.triangles.size(), vertices, &e.blob, &e.box);
+        if (e.encoded) e.checksum = model_checksum(e.blob.data(), e.blob.size());
+      }
+    };
+    std::vector<std::thread> others;
+    for (std::size_t t = 1; t < std::min(threads, held); ++t) others.emplace_back(work, t);
+    work(0);
+    for (std::thread& t : others) t.join();
+    for (std::size_t i = 0; i < held && ok; ++i) {
+      if (!batch[i].encoded) ok = false;
+      else visit(batch[i]);
+    }
+    held = 0;
+  };
+  for_each_page(h, [&](std::size_t page, const Triangle* triangles, std::size_t count) {
+    if (!ok) return;
+    EncodedPage& e = batch[held++];
+    e.page = page;
+    e.triangles.assign(triangles, triangles + count);
+    if (held == batch.size()) flush();
+  });
+  if (held > 0 && ok) flush();
+  return ok;
+}
+
 // The file's bytes in order, to `out` (called with runs of bytes), with the
 // trailer's checksum taken as they pass: a model is written without a copy
 // of it in memory.
@@ -331,8 +382,6 @@ void emit_model(const LodModel& model, std::uint32_t major,
   // again as they are written, so that they are never held whole.
   bool paged = model.clusters && major >= kPacked && !model.clusters->pages.empty() &&
                pages_follow_triangles(*model.clusters);
-  PageEncoder encoder;
-  std::vector<std::uint8_t> blob;
   std::uint64_t pages_checksum = 0;
   if (paged) {
     const ClusterHierarchy& h = *model.clusters;
@@ -340,18 +389,13 @@ void emit_model(const LodModel& model, std::uint32_t major,
     if (!hash) throw std::bad_alloc();
     XXH64_reset(hash.get(), 0);
     records.page_extents.resize(h.pages.size());
-    for_each_page(h, [&](std::size_t page, const Triangle* triangles, std::size_t count) {
-      Aabb box;
-      if (!paged || !encoder.encode(triangles, count, model.vertices, &blob, &box)) {
-        paged = false;
-        return;
-      }
-      PageExtent& e = records.page_extents[page];
-      e = {records.page_bytes, std::uint32_t(blob.size()), 0, model_checksum(blob.data(), blob.size()), {}, {}};
-      std::memcpy(&e.vertices, blob.data(), 4);
-      for (int k = 0; k < 3; ++k) e.min[k] = box.min[k], e.max[k] = box.max[k];
-      XXH64_update(hash.get(), blob.data(), blob.size());
-      records.page_bytes += blob.size();
+    paged = encode_pages(h, model.vertices, [&](const EncodedPage& page) {
+      PageExtent& e = records.page_extents[page.page];
+      e = {records.page_bytes, std::uint32_t(page.blob.size()), 0, page.checksum, {}, {}};
+      std::memcpy(&e.vertices, page.blob.data(), 4);
+      for (int k = 0; k < 3; ++k) e.min[k] = page.box.min[k], e.max[k] = page.box.max[k];
+      XXH64_update(hash.get(), page.blob.data(), page.blob.size());
+      records.page_bytes += page.blob.size();
     });
     pages_checksum = XXH64_digest(hash.get());
     if (!paged) records.page_extents.clear(), records.page_bytes = 0;
@@ -378,11 +422,8 @@ void emit_model(const LodModel& model, std::uint32_t major,
     }
     if (out.tag == fourcc("PGEO")) {
       out.stream = [&](const Emit& emit) {
-        for_each_page(*model.clusters, [&](std::size_t, const Triangle* triangles, std::size_t count) {
-          Aabb box;
-          encoder.encode(triangles, count, model.vertices, &blob, &box);
-          emit(blob.data(), blob.size());
-        });
+        encode_pages(*model.clusters, model.vertices,
+                     [&](const EncodedPage& page) { emit(page.blob.data(), page.blob.size()); });
       };
       out.stream_checksum = pages_checksum;
     }
