@@ -794,6 +794,42 @@ void commit_block(Shared& s, Block& b, ClusterHierarchy* out, Block* carried, Tr
   write_block(b, false, s.keeps_clusters, out, carried, spool);
 }
 
+// The lanes of a pass whose blocks run side by side: room in the shared
+// tables for every vertex the pass can place (at most three a triangle), so
+// that commits never move the tables the lanes read; each lane reading the
+// vertices there were when the pass began and holding back those it places;
+// marks of their own but for the first lane's. One lane takes every thread.
+struct PassLanes {
+  std::vector<std::vector<std::int32_t>> own_marks;
+  std::vector<Lane> lanes;
+};
+void make_lanes(Shared& s, Lane& main, std::size_t pass_triangles, std::size_t lane_count, PassLanes* out) {
+  const std::size_t room = 3 * pass_triangles;
+  s.weld.reserve(s.weld.size() + room);
+  s.locked.reserve(s.locked.size() + room);
+  s.vertex_group.reserve(s.vertex_group.size() + room);
+  s.added_positions.reserve(s.added_positions.size() + room);
+  if (!s.input.normals.empty()) s.added_normals.reserve(s.added_normals.size() + room);
+  if (!s.input.colors.empty()) s.added_colors.reserve(s.added_colors.size() + room);
+  out->own_marks.resize(lane_count > 0 ? lane_count - 1 : 0);
+  out->lanes.resize(lane_count);
+  for (std::size_t l = 0; l < lane_count; ++l) {
+    Lane& lane = out->lanes[l];
+    lane.threads = lane_count == 1 ? main.threads : 1;
+    lane.holds_placed = true;
+    lane.input = s.input;
+    lane.input.positions = s.input.positions.frozen();
+    lane.input.normals = s.input.normals.frozen();
+    lane.input.colors = s.input.colors.frozen();
+    if (l == 0) {
+      lane.marks = main.marks;
+    } else {
+      out->own_marks[l - 1].assign(s.vertex_group.size(), -1);
+      lane.marks = &out->own_marks[l - 1];
+    }
+  }
+}
+
 // ---- blocks sent between ranks --------------------------------------------
 
 // Both ends run the same binary, so arrays travel as they lie in memory
@@ -895,30 +931,8 @@ void blocks_across_ranks(Shared& s, Lane& main, std::size_t blocks, std::size_t 
   s.stats.blocks_here += own.size();
   const int asked = s.options->lanes > 0 ? std::min(s.options->lanes, main.threads) : main.threads;
   const std::size_t lane_count = std::min<std::size_t>(std::size_t(std::max(asked, 1)), own.size());
-  const std::size_t room = 3 * pass_triangles;
-  s.weld.reserve(s.weld.size() + room);
-  s.locked.reserve(s.locked.size() + room);
-  s.vertex_group.reserve(s.vertex_group.size() + room);
-  s.added_positions.reserve(s.added_positions.size() + room);
-  if (!s.input.normals.empty()) s.added_normals.reserve(s.added_normals.size() + room);
-  if (!s.input.colors.empty()) s.added_colors.reserve(s.added_colors.size() + room);
-  std::vector<std::vector<std::int32_t>> own_marks(lane_count > 0 ? lane_count - 1 : 0);
-  std::vector<Lane> lanes(lane_count);
-  for (std::size_t l = 0; l < lane_count; ++l) {
-    Lane& lane = lanes[l];
-    lane.threads = lane_count == 1 ? main.threads : 1;
-    lane.holds_placed = true;
-    lane.input = s.input;
-    lane.input.positions = s.input.positions.frozen();
-    lane.input.normals = s.input.normals.frozen();
-    lane.input.colors = s.input.colors.frozen();
-    if (l == 0) {
-      lane.marks = main.marks;
-    } else {
-      own_marks[l - 1].assign(s.vertex_group.size(), -1);
-      lane.marks = &own_marks[l - 1];
-    }
-  }
+  PassLanes pass;
+  make_lanes(s, main, pass_triangles, lane_count, &pass);
   const std::size_t window = 2 * std::max<std::size_t>(lane_count, 1);
   std::vector<Block> finished(own.size());
   std::vector<std::uint8_t> ready(own.size(), 0);
@@ -948,7 +962,7 @@ void blocks_across_ranks(Shared& s, Lane& main, std::size_t blocks, std::size_t 
     }
   };
   std::vector<std::thread> threads;
-  for (Lane& lane : lanes) threads.emplace_back(run, std::ref(lane));
+  for (Lane& lane : pass.lanes) threads.emplace_back(run, std::ref(lane));
   try {
     for (std::size_t b = 0; b < blocks; ++b) {
       const int maker = int(b % ranks);
@@ -1010,32 +1024,9 @@ void blocks_side_by_side(Shared& s, Lane& main, std::size_t blocks, std::size_t 
     }
     return;
   }
-  // Room for every vertex the pass can place (at most three a triangle), so
-  // that commits never move the tables the lanes read.
-  const std::size_t room = 3 * pass_triangles;
-  s.weld.reserve(s.weld.size() + room);
-  s.locked.reserve(s.locked.size() + room);
-  s.vertex_group.reserve(s.vertex_group.size() + room);
-  s.added_positions.reserve(s.added_positions.size() + room);
-  if (!s.input.normals.empty()) s.added_normals.reserve(s.added_normals.size() + room);
-  if (!s.input.colors.empty()) s.added_colors.reserve(s.added_colors.size() + room);
-  std::vector<std::vector<std::int32_t>> own_marks(lane_count - 1);
-  std::vector<Lane> lanes(lane_count);
-  for (std::size_t l = 0; l < lane_count; ++l) {
-    Lane& lane = lanes[l];
-    lane.threads = 1;
-    lane.holds_placed = true;
-    lane.input = s.input;
-    lane.input.positions = s.input.positions.frozen();
-    lane.input.normals = s.input.normals.frozen();
-    lane.input.colors = s.input.colors.frozen();
-    if (l == 0) {
-      lane.marks = main.marks;
-    } else {
-      own_marks[l - 1].assign(s.vertex_group.size(), -1);
-      lane.marks = &own_marks[l - 1];
-    }
-  }
+  PassLanes pass;
+  make_lanes(s, main, pass_triangles, lane_count, &pass);
+  std::vector<Lane>& lanes = pass.lanes;
   const std::size_t window = 2 * lane_count;
   std::vector<Block> finished(blocks);
   std::vector<std::uint8_t> ready(blocks, 0);
