@@ -3,6 +3,7 @@
 #include <scan2lod/core/error.h>
 #include <scan2lod/core/morton.h>
 #include <scan2lod/core/sort_on_cores.h>
+#include <scan2lod/distributed/message.h>
 #include <scan2lod/distributed/work_sharing.h>
 #include <scan2lod/lod/clusters/cluster_partition.h>
 #include <scan2lod/lod/clusters/group_clustering.h>
@@ -20,7 +21,6 @@
 #include <mutex>
 #include <stdexcept>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <limits>
 #include <numeric>
@@ -832,74 +832,39 @@ void make_lanes(Shared& s, Lane& main, std::size_t pass_triangles, std::size_t l
 
 // ---- blocks sent between ranks --------------------------------------------
 
-// Both ends run the same binary, so arrays travel as they lie in memory
-// (Eigen's vectors are plain floats, though not trivially copyable by the
-// standard's rule).
-template <class T>
-void pack(std::string* out, const std::vector<T>& v) {
-  const std::uint64_t n = v.size();
-  out->append(reinterpret_cast<const char*>(&n), sizeof n);
-  out->append(reinterpret_cast<const char*>(v.data()), n * sizeof(T));
-}
-template <class T>
-void pack_value(std::string* out, const T& value) {
-  static_assert(std::is_trivially_copyable_v<T>, "values travel as they lie in memory");
-  out->append(reinterpret_cast<const char*>(&value), sizeof value);
-}
+}  // namespace
 
-class Unpacker {
- public:
-  explicit Unpacker(const std::string& bytes) : bytes_(bytes) {}
-  template <class T>
-  void get(std::vector<T>* v) {
-    std::uint64_t n = 0;
-    get_value(&n);
-    if (n > (bytes_.size() - at_) / sizeof(T)) throw std::runtime_error("a block sent between ranks is cut short");
-    v->resize(n);
-    std::memcpy(static_cast<void*>(v->data()), take(n * sizeof(T)), n * sizeof(T));
-  }
-  template <class T>
-  void get_value(T* value) {
-    std::memcpy(value, take(sizeof(T)), sizeof(T));
-  }
+template <>
+struct TravelsAsBytes<Sphere> : std::true_type {};
 
- private:
-  const char* take(std::size_t n) {
-    if (n > bytes_.size() - at_) throw std::runtime_error("a block sent between ranks is cut short");
-    const char* p = bytes_.data() + at_;
-    at_ += n;
-    return p;
-  }
-  const std::string& bytes_;
-  std::size_t at_ = 0;
-};
+namespace {
 
 std::string packed_block(const Block& b) {
-  std::string out;
-  pack(&out, b.h.clusters), pack(&out, b.h.triangles), pack(&out, b.h.groups);
-  pack(&out, b.sphere), pack(&out, b.own_error), pack(&out, b.active);
-  pack_value(&out, std::uint64_t(b.seeds)), pack_value(&out, std::int32_t(b.round)), pack_value(&out, b.simplified);
-  pack_value(&out, std::uint64_t(b.held.size()));
+  MessageWriter out;
+  out.put(b.h.clusters), out.put(b.h.triangles), out.put(b.h.groups);
+  out.put(b.sphere), out.put(b.own_error), out.put(b.active);
+  out.put(std::uint64_t(b.seeds)), out.put(std::int32_t(b.round)), out.put(b.simplified);
+  out.put(std::uint64_t(b.held.size()));
   for (const HeldPlaced& p : b.held) {
-    pack_value(&out, p.first), pack_value(&out, p.end);
-    pack(&out, p.positions), pack(&out, p.normals), pack(&out, p.colors);
+    out.put(p.first), out.put(p.end);
+    out.put(p.positions), out.put(p.normals), out.put(p.colors);
   }
-  return out;
+  return std::move(out.bytes());
 }
 
 Block unpacked_block(const std::string& bytes) {
-  Unpacker in(bytes);
+  MessageReader in(bytes);
   Block b;
   in.get(&b.h.clusters), in.get(&b.h.triangles), in.get(&b.h.groups);
   in.get(&b.sphere), in.get(&b.own_error), in.get(&b.active);
   std::uint64_t seeds = 0, held = 0;
   std::int32_t round = 0;
-  in.get_value(&seeds), in.get_value(&round), in.get_value(&b.simplified);
+  in.get(&seeds), in.get(&round), in.get(&b.simplified);
   b.seeds = std::size_t(seeds), b.round = round;
-  in.get_value(&held);
+  in.get(&held);
   b.held.resize(std::size_t(held));
   for (HeldPlaced& p : b.held) {
-    in.get_value(&p.first), in.get_value(&p.end);
+    in.get(&p.first), in.get(&p.end);
     in.get(&p.positions), in.get(&p.normals), in.get(&p.colors);
   }
   return b;
