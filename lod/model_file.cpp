@@ -323,7 +323,9 @@ void for_each_page(const ClusterHierarchy& h,
 // One page's encoding, as encode_pages() hands it over.
 struct EncodedPage {
   std::size_t page = 0;
-  std::vector<Triangle> triangles;  // its triangles, copied: the spool's are gone after the visit
+  const Triangle* triangles = nullptr;
+  std::size_t count = 0;
+  std::vector<Triangle> copy;  // a spooled hierarchy's: its buffer is gone after the visit
   std::vector<std::uint8_t> blob;
   Aabb box;
   std::uint64_t checksum = 0;
@@ -345,7 +347,7 @@ bool encode_pages(const ClusterHierarchy& h, const VertexArray& vertices,
     auto work = [&](std::size_t t) {
       for (std::size_t i = t; i < held; i += threads) {
         EncodedPage& e = batch[i];
-        e.encoded = encoders[t].encode(e.triangles.data(), e.triangles.size(), vertices, &e.blob, &e.box);
+        e.encoded = encoders[t].encode(e.triangles, e.count, vertices, &e.blob, &e.box);
         if (e.encoded) e.checksum = model_checksum(e.blob.data(), e.blob.size());
       }
     };
@@ -363,7 +365,9 @@ bool encode_pages(const ClusterHierarchy& h, const VertexArray& vertices,
     if (!ok) return;
     EncodedPage& e = batch[held++];
     e.page = page;
-    e.triangles.assign(triangles, triangles + count);
+    e.count = count;
+    e.triangles = triangles;
+    if (h.spool) e.copy.assign(triangles, triangles + count), e.triangles = e.copy.data();
     if (held == batch.size()) flush();
   });
   if (held > 0 && ok) flush();

@@ -11,6 +11,8 @@
 #include <numeric>
 #include <thread>
 
+#include <omp.h>
+
 namespace scan2lod {
 namespace {
 
@@ -61,7 +63,7 @@ const std::array<std::array<std::int8_t, 12>, 12>& face_of() {
 WeldedSurface::WeldedSurface(const CubeGrid& grid, int threads)
     : grid_(grid),
       h_(float(grid.cube_size)),
-      threads_(threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency()))) {}
+      threads_(threads > 0 ? threads : omp_get_max_threads()) {}
 
 void WeldedSurface::reserve(std::size_t vertices, std::size_t leaves, std::size_t triangles, bool colored) {
   vertex_edge_.reserve(vertices);

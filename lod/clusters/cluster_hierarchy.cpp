@@ -358,15 +358,19 @@ struct Shared {
   SimplifyInput input;
   float error_floor = 0;
   double simplified = 0, expected = 1;
-  // A job of several ranks (hierarchy_ranks.h), or null. Ranks other than 0
-  // keep no finished clusters: only their groups' count, which numbers the
-  // groups of the blocks that follow.
-  WorkSharing* job = nullptr;
-  bool keeps_clusters = true;
   ClusterBuildStats stats;
 
   Shared() = default;
   Shared(const Shared&) = delete;  // the views point into it
+
+  // The job whose ranks share the blocks (hierarchy_ranks.h), or null.
+  WorkSharing* job() const {
+    WorkSharing* j = options->sharing;
+    return j && j->ranks() > 1 ? j : nullptr;
+  }
+  // Ranks other than 0 keep no finished clusters: only their groups' count,
+  // which numbers the groups of the blocks that follow.
+  bool keeps_clusters() const { return !job() || job()->rank() == 0; }
 
   // A group's placed vertices into the shared arrays, and `triangles` (-1 - i
   // for placed vertex i) onto their indices; each is its own weld, unlocked.
@@ -791,7 +795,7 @@ void commit_block(Shared& s, Block& b, ClusterHierarchy* out, Block* carried, Tr
   s.simplified += b.simplified;
   b.simplified = 0;
   if (s.options->progress) s.options->progress(std::min(1.0, s.simplified / s.expected));
-  write_block(b, false, s.keeps_clusters, out, carried, spool);
+  write_block(b, false, s.keeps_clusters(), out, carried, spool);
 }
 
 // The lanes of a pass whose blocks run side by side: room in the shared
@@ -889,7 +893,7 @@ void broadcast_bytes(WorkSharing& job, int root, std::string* bytes) {
 template <class Make>
 void blocks_across_ranks(Shared& s, Lane& main, std::size_t blocks, std::size_t pass_triangles, Make make,
                          ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
-  WorkSharing& job = *s.job;
+  WorkSharing& job = *s.job();
   const std::size_t ranks = std::size_t(job.ranks()), rank = std::size_t(job.rank());
   std::vector<std::size_t> own;
   for (std::size_t b = rank; b < blocks; b += ranks) own.push_back(b);
@@ -978,7 +982,7 @@ template <class Make>
 void blocks_side_by_side(Shared& s, Lane& main, std::size_t blocks, std::size_t pass_triangles, Make make,
                          ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
   s.stats.blocks += blocks;
-  if (s.job && s.job->ranks() > 1) return blocks_across_ranks(s, main, blocks, pass_triangles, make, out, carried, spool);
+  if (s.job()) return blocks_across_ranks(s, main, blocks, pass_triangles, make, out, carried, spool);
   s.stats.blocks_here += blocks;
   const int asked = s.options->lanes > 0 ? std::min(s.options->lanes, main.threads) : main.threads;
   const std::size_t lane_count = std::min<std::size_t>(std::size_t(std::max(asked, 1)), blocks);
@@ -1046,7 +1050,7 @@ ClusterHierarchy build_in_blocks(Shared& s, Lane& main, std::vector<Triangle> tr
   // The first round keeps about two thirds, each later one about half: the
   // hierarchy holds about 2.3 times the full detail. Reserved, so that
   // growth never doubles it.
-  if (!spool && s.keeps_clusters) out.triangles.reserve(std::size_t(2.4 * double(triangles.size())) + 4096);
+  if (!spool && s.keeps_clusters()) out.triangles.reserve(std::size_t(2.4 * double(triangles.size())) + 4096);
   Block carried;
   int round = 1;
   {
@@ -1070,7 +1074,7 @@ ClusterHierarchy build_in_blocks(Shared& s, Lane& main, std::vector<Triangle> tr
     const std::size_t left = carried.h.triangles.size();
 
     if (left <= block || carried.h.clusters.size() <= std::size_t(options.group_clusters) || round >= 254) {
-      if (!s.keeps_clusters) return out;  // the rounds to the top run on rank 0 alone
+      if (!s.keeps_clusters()) return out;  // the rounds to the top run on rank 0 alone
       carried.round = round;
       run_rounds(s, main, &carried, 255, true);
       write_block(carried, true, true, &out, nullptr, spool);
@@ -1255,8 +1259,6 @@ void serve_cluster_hierarchy(WorkSharing& job, int threads) {
   Shared s;
   Lane main;
   prepare(s, main, positions, normals, colors, options, triangles.size());
-  s.job = &job;
-  s.keeps_clusters = false;
   build_in_blocks(s, main, std::move(triangles), start.block_triangles);
 }
 
@@ -1273,7 +1275,7 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
   Lane main;
   prepare(s, main, positions, normals, colors, options, triangles.size());
   const std::int64_t blocked = block_triangles_for(options.block_triangles, triangles.size());
-  if (options.sharing && options.sharing->ranks() > 1) {
+  if (WorkSharing* job = s.job()) {
     HierarchyStart start;
     start.blocked = blocked > 0;
     start.positions = positions.size(), start.normals = normals.size(), start.colors = colors.size();
@@ -1283,14 +1285,12 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
     start.lanes = options.lanes, start.optimal_placement = options.optimal_placement;
     start.reduction = options.reduction, start.first_reduction = options.first_reduction, start.stall = options.stall;
     start.normal_weight = options.normal_weight, start.color_weight = options.color_weight;
-    WorkSharing& job = *options.sharing;
-    job.broadcast_from(0, &start, sizeof start);
+    job->broadcast_from(0, &start, sizeof start);
     if (blocked) {
-      broadcast_array(job, const_cast<Vec3f*>(positions.data()), positions.size());
-      broadcast_array(job, const_cast<Vec3f*>(normals.data()), normals.size());
-      broadcast_array(job, const_cast<Rgb*>(colors.data()), colors.size());
-      broadcast_array(job, triangles.data(), triangles.size());
-      s.job = &job;
+      broadcast_array(*job, const_cast<Vec3f*>(positions.data()), positions.size());
+      broadcast_array(*job, const_cast<Vec3f*>(normals.data()), normals.size());
+      broadcast_array(*job, const_cast<Rgb*>(colors.data()), colors.size());
+      broadcast_array(*job, triangles.data(), triangles.size());
       s.stats.bytes_exchanged = double(positions.size() * sizeof(Vec3f) + normals.size() * sizeof(Vec3f) +
                                        colors.size() * sizeof(Rgb) + triangles.size() * sizeof(Triangle));
     }

@@ -114,6 +114,9 @@ struct ClusterBuildStats {
   double bytes_exchanged = 0;   // sent to and received from the other ranks: the mesh, then blocks
 };
 
+// Every field that shapes the hierarchy also travels to the other ranks of a
+// job (HierarchyStart, lod/clusters/cluster_hierarchy.cpp): a new one must
+// join it there, or the ranks build different blocks.
 struct ClusterOptions {
   int cluster_triangles = 128;   // most triangles per cluster
   int group_clusters = 32;       // clusters per group, about (8 and 16 stall on the bunny: bench/lod)
