@@ -100,6 +100,34 @@ std::int64_t choose_cluster_block(std::int64_t asked, std::size_t triangles, dou
   return held;
 }
 
+// A reconstruction touches about 1.9 triangles a cube (the pair's scans:
+// 13.1 M triangles over 6.95 M estimated cubes at R = 2048, 52.5 M over
+// 28.0 M at 4096).
+constexpr double kTrianglesPerCube = 1.9;
+
+// The weld and the cluster hierarchy still hold the whole surface, whatever
+// the budget: where they need more than the machine has, the build is
+// refused before its bricks, not killed for want of memory hours into it.
+// The surface grows with R^2, so the message names the finest power-of-two
+// resolution they would fit.
+void refuse_what_the_machine_cannot_hold(const BrickPlan& plan, const BuildOptions& options) {
+  const double machine = machine_memory_bytes();
+  const double triangles = kTrianglesPerCube * plan.cubes;
+  const double hierarchy = options.clusters ? blocked_cluster_bytes(std::size_t(triangles), kSmallestBlock) : 0.0;
+  const double needs = std::max(plan.weld_bytes, hierarchy);
+  if (needs <= machine) return;
+  int fits = options.reconstruct.resolution;
+  double at = needs;
+  while (fits > 64 && at > machine) fits /= 2, at /= 4;
+  throw InputError("", "resolution " + std::to_string(options.reconstruct.resolution) +
+                           " makes a surface of about " + std::to_string(std::llround(triangles / 1e6)) +
+                           " M triangles, whose weld needs about " + binary_size(plan.weld_bytes) +
+                           (options.clusters ? " and whose cluster hierarchy about " + binary_size(hierarchy) : "") +
+                           ", more than this machine's " + binary_size(machine) +
+                           ": those stages hold the whole surface in memory (the bricks keep to the budget); "
+                           "--resolution " + std::to_string(fits) + " would need about " + binary_size(at));
+}
+
 // Phase 2: the strategy, from the in-core estimate against the budget.
 // Spooled points go by bricks: they took a quarter of the budget alone.
 bool choose_bricks(const OrientedPoints* points, const BuildOptions& options, double budget, BuildReport* report) {
@@ -155,6 +183,7 @@ Reconstruction reconstruct_budgeted(const OrientedPoints* points, const PointSpo
   if (options.work_dir.empty()) throw InputError("", "a build in bricks needs a work folder");
   report->plan = spool ? plan_bricks(*spool, options.reconstruct, bricks) : plan_bricks(*points, options.reconstruct, bricks);
   if (spool) report->estimated_bytes = report->plan.estimated_bytes;
+  refuse_what_the_machine_cannot_hold(report->plan, options);
   // The bricks hold the budget; the weld after them does not yet: say so.
   if (report->plan.weld_bytes > budget)
     report->warnings.push_back("the welded surface will need about " + binary_size(report->plan.weld_bytes) +

@@ -9,6 +9,7 @@
 #include <scan2lod/measure/topology.h>
 #include <scan2lod/pipeline/build_model.h>
 #include <scan2lod/reconstruct/brick_reconstruction.h>
+#include <scan2lod/reconstruct/resolution_guard.h>
 
 #include "test_shapes.h"
 #include "test_support.h"
@@ -250,6 +251,33 @@ TEST(BrickReconstruction, TheCommandLineRefusesABudgetBelowOneBrick) {
                                               "/data/bunny/bun.conf --brick-cubes 64 -o " + (dir / "o.mco").string());
   EXPECT_NE(o.status, 0);
   EXPECT_NE(o.output.find("--structure clusters"), std::string::npos) << o.output;
+}
+
+TEST(BrickReconstruction, ASurfaceTheMachineCannotWeldIsRefusedBeforeItsBricks) {
+  // The weld still holds the whole surface: at a resolution whose surface
+  // this machine cannot hold, the build stops before the work folder is made,
+  // naming the machine's memory and a resolution that fits.
+  using scan2lod::testing::run_cli;
+  ReconstructOptions options;
+  BrickOptions bricks;
+  bricks.memory_bytes = 1024.0 * (1 << 20);
+  int R = 2048;
+  for (options.resolution = R; plan_bricks(bunny_points(), options, bricks).weld_bytes <= machine_memory_bytes();)
+    options.resolution = R *= 2;
+  const fs::path dir = fresh_dir("machine");
+  fs::create_directories(dir);
+  const scan2lod::testing::CliRun r =
+      run_cli("build " + std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf --structure clusters -r " +
+              std::to_string(R) + " --memory 1G --work-dir " + (dir / "work").string() + " -o " +
+              (dir / "m.mco").string());
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("more than this machine's " + binary_size(machine_memory_bytes())), std::string::npos)
+      << r.output;
+  const std::size_t at = r.output.find("--resolution ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const int fits = std::atoi(r.output.c_str() + at + 13);
+  EXPECT_TRUE(fits > 0 && fits < R) << r.output;
+  EXPECT_TRUE(fs::is_empty(dir));
 }
 
 TEST(BrickReconstruction, ClusterHierarchyOfABrickBuildIsTheInCoreOne) {
