@@ -14,11 +14,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <string>
@@ -173,13 +175,19 @@ void interrupt_at_moments(const std::vector<std::string>& args, const fs::path& 
   const std::string name = output.filename().string();
   fs::create_directories(folder);
   const std::string watched = fs::canonical(folder).string();  // as /proc shows open files
-  auto start = Clock::now();
-  const pid_t pid = start_cli(args, env);
-  ASSERT_GT(pid, 0);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  const double seconds = seconds_since(start);
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the undisturbed run failed";
+  // The fastest of three undisturbed runs times the moments: one run slowed
+  // by a load on the machine spread them past the runs that followed, which
+  // then ended before their signals (a failure seen once beside a build).
+  double seconds = std::numeric_limits<double>::infinity();
+  for (int run = 0; run < 3; ++run) {
+    auto start = Clock::now();
+    const pid_t pid = start_cli(args, env);
+    ASSERT_GT(pid, 0);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    seconds = std::min(seconds, seconds_since(start));
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the undisturbed run failed";
+  }
   const std::string complete = bytes_of(output);
   ASSERT_FALSE(complete.empty());
   const std::string previous = "the output of an earlier run\n";
