@@ -215,11 +215,18 @@ PointSurvey survey(const PointSource& points, const CubeGrid& grid, int smallest
 }
 
 // The weld holds the whole surface: leaves, triangles, vertices and their
-// keys, then the mesh: about 160 bytes a touched cube at its peak (653 MiB
-// for 3.6 M cubes and 1.05 M points, measured). On disk a cube's share takes
-// about 54 bytes (bench/scale: 184 MiB for 3.6 M cubes in 42 bricks, 744 MiB
-// for 14.6 M in 194); 60 leaves room.
-constexpr double kWeldBytesPerCube = 160.0;
+// keys, then the mesh. The process's peak in the weld (its peak RSS where the
+// bricks peaked lower): 258 MiB for 1.70 M estimated cubes (the pair's 16
+// scans, 1.03 M points, R = 1024), 837 MiB for 6.95 M (9.8 M points, R =
+// 2048), 3490 MiB for 28.0 M (99 M points, R = 4096): about 73 MiB and 110-122
+// bytes a cube. The leaves' hash table holds a power of two of 12-byte slots,
+// 2 to 4 a leaf, so a count just past a power of two costs some 23 bytes a
+// cube more: 135 here. (160 bytes a cube, from the first size alone, put the
+// 10^8-point weld over the 4 GiB budget that it kept.) On disk a cube's share
+// takes about 54 bytes (bench/scale: 184 MiB for 3.6 M cubes in 42 bricks, 744
+// MiB for 14.6 M in 194); 60 leaves room.
+constexpr double kWeldBaseBytes = 76.0 * (1 << 20);
+constexpr double kWeldBytesPerCube = 135.0;
 constexpr double kDiskBytesPerCube = 60.0;
 
 
@@ -912,7 +919,7 @@ BrickPlan plan_for(const PointSource& points, const ReconstructOptions& options,
                              " in core, and more than 2^32 bricks of " + std::to_string(B) +
                              " cubes: choose a coarser --resolution");
   plan.brick_bytes = brick_bytes(B);
-  plan.weld_bytes = kWeldBytesPerCube * whole.cubes;
+  plan.weld_bytes = kWeldBaseBytes + kWeldBytesPerCube * whole.cubes;
   plan.disk_bytes = kDiskBytesPerCube * whole.cubes + double(sizeof(PointRecord)) * double(count);
   plan.cubes = whole.cubes;
   plan.estimated_bytes = whole.bytes;
