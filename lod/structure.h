@@ -1,0 +1,56 @@
+// What an LOD structure implements to stand behind the face (lod/lod_model.h):
+// its levels (StructureLevels) and its record in the table of registered
+// structures (StructureKind). Everything generic walks that table: naming and
+// presence and LevelExtractor. Each structure implements both in its own room
+// (lod/octree/octree_structure.cpp, lod/clusters/cluster_structure.cpp), and
+// lod/registered_structures.cpp lists them. Internal to the library.
+#pragma once
+
+#include <scan2lod/lod/lod_model.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace scan2lod {
+
+// Levels of one structure of one model. It may keep scratch space and cut
+// tables between calls (a slider or a moving camera asks many times).
+class StructureLevels {
+ public:
+  virtual ~StructureLevels() = default;
+  // Chooses the level `request` asks for and says how into `cut` (its
+  // priority, error or clusters), writing no triangles yet. Throws InputError
+  // for a request the structure does not offer, saying what it offers.
+  virtual void select(const LevelRequest& request, LevelCut* cut) = 0;
+  // Writes the chosen level's triangles into `cut` (cleared), and its percent.
+  virtual void emit(LevelCut* cut) = 0;
+  // Triangles at full detail, and of the coarsest level offered.
+  virtual std::int64_t full_triangles() const = 0;
+  virtual std::int64_t coarsest_triangles() const = 0;
+  // The triangle count of every level offered, in any order.
+  virtual std::vector<std::int64_t> offered_triangles() const = 0;
+  // Levels a view may colour, and per triangle of `cut` (the last emitted)
+  // its level.
+  virtual int levels() const = 0;
+  virtual std::vector<std::uint8_t> triangle_levels(const LevelCut& cut) const = 0;
+};
+
+// One registered structure.
+struct StructureKind {
+  LodStructure id;
+  const char* name;    // as the command line spells it: "octree"
+  const char* phrase;  // in messages: "the octree"
+  bool (*present)(const LodModel& model);
+  // Requires present(model); the levels keep a reference to it.
+  std::unique_ptr<StructureLevels> (*make_levels)(const LodModel& model);
+};
+
+// Every registered structure, in the order a model's default is chosen (the
+// first the model has) and the command line offers them.
+const std::vector<const StructureKind*>& registered_structures();
+
+const StructureKind& structure_kind(LodStructure id);
+
+}  // namespace scan2lod
