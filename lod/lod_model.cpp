@@ -11,6 +11,13 @@
 
 namespace scan2lod {
 
+std::vector<const StructureKind*> structures_in_file_order() {
+  std::vector<const StructureKind*> kinds = registered_structures();
+  std::stable_sort(kinds.begin(), kinds.end(),
+                   [](const StructureKind* a, const StructureKind* b) { return a->first_major < b->first_major; });
+  return kinds;
+}
+
 const StructureKind& structure_kind(LodStructure id) {
   for (const StructureKind* kind : registered_structures())
     if (kind->id == id) return *kind;

@@ -1,7 +1,8 @@
 // What an LOD structure implements to stand behind the face (lod/lod_model.h):
 // its levels (StructureLevels) and its record in the table of registered
 // structures (StructureKind). Everything generic walks that table: naming and
-// presence and LevelExtractor. Each structure implements both in its own room
+// presence, LevelExtractor and the model file's sections
+// (lod/model_sections.h). Each structure implements both in its own room
 // (lod/octree/octree_structure.cpp, lod/clusters/cluster_structure.cpp), and
 // lod/registered_structures.cpp lists them. Internal to the library.
 #pragma once
@@ -14,6 +15,8 @@
 #include <vector>
 
 namespace scan2lod {
+
+class StructureSections;
 
 // Levels of one structure of one model. It may keep scratch space and cut
 // tables between calls (a slider or a moving camera asks many times).
@@ -42,14 +45,22 @@ struct StructureKind {
   LodStructure id;
   const char* name;    // as the command line spells it: "octree"
   const char* phrase;  // in messages: "the octree"
+  // The model-file format that first held it: structures lay out their
+  // sections in the order they joined the format.
+  std::uint32_t first_major;
   bool (*present)(const LodModel& model);
   // Requires present(model); the levels keep a reference to it.
   std::unique_ptr<StructureLevels> (*make_levels)(const LodModel& model);
+  // Its part of one model file being written or read.
+  std::unique_ptr<StructureSections> (*make_sections)();
 };
 
 // Every registered structure, in the order a model's default is chosen (the
 // first the model has) and the command line offers them.
 const std::vector<const StructureKind*>& registered_structures();
+
+// The same, in the order they joined the model-file format (first_major).
+std::vector<const StructureKind*> structures_in_file_order();
 
 const StructureKind& structure_kind(LodStructure id);
 

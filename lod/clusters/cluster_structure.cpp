@@ -3,7 +3,7 @@
 // record among the registered structures (lod/structure.h), its summary, and
 // adding one to a model.
 #include <scan2lod/core/error.h>
-#include <scan2lod/lod/clusters/cluster_hierarchy.h>
+#include <scan2lod/lod/clusters/cluster_sections.h>
 #include <scan2lod/lod/structure.h>
 
 #include <algorithm>
@@ -176,10 +176,12 @@ const StructureKind& cluster_structure() {
       LodStructure::kClusters,
       "clusters",
       "the cluster hierarchy",
+      3,
       [](const LodModel& model) { return model.clusters.has_value(); },
       [](const LodModel& model) -> std::unique_ptr<StructureLevels> {
         return std::make_unique<ClusterLevels>(*model.clusters);
       },
+      []() -> std::unique_ptr<StructureSections> { return std::make_unique<ClusterSections>(); },
   };
   return kind;
 }

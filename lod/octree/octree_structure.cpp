@@ -4,6 +4,7 @@
 // and a model made from a built octree.
 #include <scan2lod/core/error.h>
 #include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/octree/octree_sections.h>
 #include <scan2lod/lod/structure.h>
 
 #include <string>
@@ -109,10 +110,12 @@ const StructureKind& octree_structure() {
       LodStructure::kOctree,
       "octree",
       "the octree",
+      1,
       [](const LodModel& model) { return model.octree.has_value(); },
       [](const LodModel& model) -> std::unique_ptr<StructureLevels> {
         return std::make_unique<OctreeLevels>(*model.octree);
       },
+      octree_sections,
   };
   return kind;
 }
