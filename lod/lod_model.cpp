@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdarg>
+#include <cstdio>
 #include <stdexcept>
 
 namespace scan2lod {
@@ -84,6 +86,21 @@ void require_structure(const LodModel& model, LodStructure s, const std::string&
     throw InputError(source, std::string("the model has no ") + structure_name(s) + " structure (it holds " +
                                  held_structures(model) + "); rebuild it with scan2lod build --structure " +
                                  structure_name(s) + " or both");
+}
+
+void StructureInfo::say(const char* format, ...) {
+  va_list args, copy;
+  va_start(args, format);
+  va_copy(copy, args);
+  const int n = std::vsnprintf(nullptr, 0, format, copy);
+  va_end(copy);
+  if (n > 0) {
+    const std::size_t at = text.size();
+    text.resize(at + std::size_t(n) + 1);
+    std::vsnprintf(text.data() + at, std::size_t(n) + 1, format, args);
+    text.resize(at + std::size_t(n));
+  }
+  va_end(args);
 }
 
 static LevelRequest request_of(LevelRequest::Kind kind) {

@@ -1,13 +1,17 @@
 // What an LOD structure implements to stand behind the face (lod/lod_model.h):
-// its levels (StructureLevels) and its record in the table of registered
-// structures (StructureKind). Everything generic walks that table: naming and
-// presence, LevelExtractor and the model file's sections
-// (lod/model_sections.h). Each structure implements both in its own room
-// (lod/octree/octree_structure.cpp, lod/clusters/cluster_structure.cpp), and
-// lod/registered_structures.cpp lists them. Internal to the library.
+// its levels (StructureLevels), its part of the model file (StructureSections,
+// lod/model_sections.h) and its record in the table of registered structures
+// (StructureKind). Everything generic walks that table: naming and presence,
+// LevelExtractor, the model file's sections and `scan2lod info`. Each
+// structure implements them in its own room (lod/octree/octree_structure.cpp
+// and octree_sections.cpp, lod/clusters/cluster_structure.cpp and
+// cluster_sections.cpp), and lod/registered_structures.cpp lists them.
+// Internal to the library.
 #pragma once
 
 #include <scan2lod/lod/lod_model.h>
+
+#include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <memory>
@@ -40,6 +44,18 @@ class StructureLevels {
   virtual std::vector<std::uint8_t> triangle_levels(const LevelCut& cut) const = 0;
 };
 
+// What `scan2lod info` says of one structure: a paragraph and a table of its
+// levels, and the same as JSON (under the structure's name; keys in README.md).
+struct StructureInfo {
+  std::string text;
+  nlohmann::ordered_json json;
+  // Keys of `json` repeated at the top level, for readers older than a
+  // second structure.
+  std::vector<std::string> top_level_keys;
+
+  void say(const char* format, ...) __attribute__((format(printf, 2, 3)));
+};
+
 // One registered structure.
 struct StructureKind {
   LodStructure id;
@@ -53,6 +69,7 @@ struct StructureKind {
   std::unique_ptr<StructureLevels> (*make_levels)(const LodModel& model);
   // Its part of one model file being written or read.
   std::unique_ptr<StructureSections> (*make_sections)();
+  StructureInfo (*info)(const LodModel& model, const std::vector<double>& percents);
 };
 
 // Every registered structure, in the order a model's default is chosen (the

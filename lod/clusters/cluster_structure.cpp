@@ -1,7 +1,7 @@
 // The cluster hierarchy (Cignoni et al. 2005) behind the LOD face: its cuts by
 // percent, triangle budget, error or camera (lod/clusters/cluster_cut.h), its
-// record among the registered structures (lod/structure.h), its summary, and
-// adding one to a model.
+// record among the registered structures (lod/structure.h), what `info` says
+// of it, and adding one to a model.
 #include <scan2lod/core/error.h>
 #include <scan2lod/lod/clusters/cluster_sections.h>
 #include <scan2lod/lod/structure.h>
@@ -156,6 +156,32 @@ class ClusterLevels final : public StructureLevels {
   std::vector<std::int32_t> selected_;
 };
 
+StructureInfo cluster_info(const LodModel& model, const std::vector<double>& percents) {
+  const ClusterSummary c = describe_clusters(model);
+  const auto lods = summarize_levels(model, LodStructure::kClusters, percents);
+  StructureInfo info;
+  nlohmann::ordered_json levels = nlohmann::ordered_json::array();
+  for (const LevelSummary& l : lods)
+    levels.push_back({{"percent", l.percent}, {"error", l.error}, {"clusters", l.clusters},
+                      {"triangles", l.triangles}, {"vertices", l.vertices}});
+  info.json = {{"clusters", c.clusters},
+               {"groups", c.groups},
+               {"levels", c.levels},
+               {"full_triangles", c.full_triangles},
+               {"stored_triangles", c.stored_triangles},
+               {"coarsest_triangles", c.coarsest_triangles},
+               {"levels_of_detail", levels}};
+  info.say("\nclusters: %zu clusters in %zu groups over %d levels; %zu triangles stored (%.2fx the full "
+           "mesh's %lld); the coarsest cut has %lld\n",
+           c.clusters, c.groups, c.levels, c.stored_triangles,
+           c.full_triangles ? double(c.stored_triangles) / double(c.full_triangles) : 0.0,
+           static_cast<long long>(c.full_triangles), static_cast<long long>(c.coarsest_triangles));
+  info.say("\n%6s %10s %10s %10s %10s\n", "LOD %", "error", "clusters", "triangles", "vertices");
+  for (const LevelSummary& l : lods)
+    info.say("%6g %10.3g %10zu %10zu %10zu\n", l.percent, l.error, l.clusters, l.triangles, l.vertices);
+  return info;
+}
+
 }  // namespace
 
 ClusterSummary describe_clusters(const LodModel& model) {
@@ -182,6 +208,7 @@ const StructureKind& cluster_structure() {
         return std::make_unique<ClusterLevels>(*model.clusters);
       },
       []() -> std::unique_ptr<StructureSections> { return std::make_unique<ClusterSections>(); },
+      cluster_info,
   };
   return kind;
 }

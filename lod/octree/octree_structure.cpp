@@ -1,7 +1,7 @@
 // The prioritized marching-cube octree (Lee 2007) behind the LOD face: its
 // levels by priority number, percent or triangle budget (lod/octree/extract.h),
-// its record among the registered structures (lod/structure.h), its summary,
-// and a model made from a built octree.
+// its record among the registered structures (lod/structure.h), what `info`
+// says of it, and a model made from a built octree.
 #include <scan2lod/core/error.h>
 #include <scan2lod/lod/octree/extract.h>
 #include <scan2lod/lod/octree/octree_sections.h>
@@ -73,6 +73,37 @@ class OctreeLevels final : public StructureLevels {
   std::vector<std::uint8_t> expanded_;  // scratch
 };
 
+StructureInfo octree_info(const LodModel& model, const std::vector<double>& percents) {
+  const OctreeSummary o = describe_octree(model);
+  const auto lods = summarize_levels(model, LodStructure::kOctree, percents);
+  StructureInfo info;
+  nlohmann::ordered_json levels = nlohmann::ordered_json::array();
+  for (const LevelSummary& l : lods)
+    levels.push_back({{"percent", l.percent}, {"priority", l.priority}, {"triangles", l.triangles},
+                      {"vertices", l.vertices}});
+  info.json = {{"resolution", o.resolution},   {"depth", o.depth},   {"nodes", o.nodes},
+               {"nodes_per_level", o.nodes_per_level}, {"leaves", o.leaves}, {"expansions", o.expansions},
+               {"pinned", o.pinned},           {"offered_levels", o.offered_levels},
+               {"coarsest_offered_triangles", o.coarsest_triangles}, {"levels_of_detail", levels}};
+  // Kept at the top level too, as before the cluster hierarchy.
+  info.top_level_keys = {"resolution", "depth", "nodes", "nodes_per_level", "leaves", "expansions", "pinned",
+                         "levels_of_detail"};
+  info.say("\noctree: resolution %d (depth %d), cube size %.6g, origin (%.6g, %.6g, %.6g)\n", o.resolution, o.depth,
+           o.cube_size, o.origin.x(), o.origin.y(), o.origin.z());
+  info.say("%zu nodes, %zu leaves, %zu expansions; nodes per level:", o.nodes, o.leaves, o.expansions);
+  for (std::size_t c : o.nodes_per_level) info.say(" %zu", c);
+  if (o.pinned)
+    info.say("\nthe first %zu expansions (%lld triangles) keep the rim at full detail: no level is offered "
+             "inside them",
+             o.pinned, static_cast<long long>(o.pinned_triangles));
+  info.say("\n%zu levels offered, from %lld triangles to %lld", o.offered_levels,
+           static_cast<long long>(o.coarsest_triangles), static_cast<long long>(o.full_triangles));
+  info.say("\n\n%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
+  for (const LevelSummary& l : lods)
+    info.say("%6g %10zu %10zu %10zu\n", l.percent, l.priority, l.triangles, l.vertices);
+  return info;
+}
+
 }  // namespace
 
 std::size_t LevelExtractor::octree_priority(const LevelRequest& request) const {
@@ -116,6 +147,7 @@ const StructureKind& octree_structure() {
         return std::make_unique<OctreeLevels>(*model.octree);
       },
       octree_sections,
+      octree_info,
   };
   return kind;
 }
