@@ -4,6 +4,7 @@
 #include <scan2lod/cli/terminal.h>
 #include <scan2lod/lod/lod_model.h>
 #include <scan2lod/lod/model_file.h>
+#include <scan2lod/lod/structure.h>
 
 #include <nlohmann/json.hpp>
 
@@ -42,62 +43,15 @@ void add_info_command(CLI::App& app) {
                model.origin.x(), model.origin.y(), model.origin.z());
     }
 
-    if (model.has(LodStructure::kOctree)) {
-      const OctreeSummary o = describe_octree(model);
-      const auto lods = summarize_levels(model, LodStructure::kOctree, percents);
+    // Each structure the model holds, as the file lays them out.
+    for (const StructureKind* kind : structures_in_file_order()) {
+      if (!kind->present(model)) continue;
+      const StructureInfo info = kind->info(model, percents);
       if (args->json) {
-        nlohmann::ordered_json levels = nlohmann::ordered_json::array();
-        for (const LevelSummary& l : lods)
-          levels.push_back({{"percent", l.percent}, {"priority", l.priority}, {"triangles", l.triangles},
-                            {"vertices", l.vertices}});
-        j["octree"] = {{"resolution", o.resolution},   {"depth", o.depth},   {"nodes", o.nodes},
-                       {"nodes_per_level", o.nodes_per_level}, {"leaves", o.leaves}, {"expansions", o.expansions},
-                       {"pinned", o.pinned},           {"offered_levels", o.offered_levels},
-                       {"coarsest_offered_triangles", o.coarsest_triangles}, {"levels_of_detail", levels}};
-        // Kept at the top level too, as before the cluster hierarchy.
-        for (const char* key : {"resolution", "depth", "nodes", "nodes_per_level", "leaves", "expansions", "pinned",
-                                "levels_of_detail"})
-          j[key] = j["octree"][key];
+        j[kind->name] = info.json;
+        for (const std::string& key : info.top_level_keys) j[key] = info.json[key];
       } else {
-        say("\noctree: resolution %d (depth %d), cube size %.6g, origin (%.6g, %.6g, %.6g)\n", o.resolution,
-                    o.depth, o.cube_size, o.origin.x(), o.origin.y(), o.origin.z());
-        say("%zu nodes, %zu leaves, %zu expansions; nodes per level:", o.nodes, o.leaves, o.expansions);
-        for (std::size_t c : o.nodes_per_level) say(" %zu", c);
-        if (o.pinned)
-          say("\nthe first %zu expansions (%lld triangles) keep the rim at full detail: no level is offered "
-                      "inside them",
-                      o.pinned, static_cast<long long>(o.pinned_triangles));
-        say("\n%zu levels offered, from %lld triangles to %lld", o.offered_levels,
-            static_cast<long long>(o.coarsest_triangles), static_cast<long long>(o.full_triangles));
-        say("\n\n%6s %10s %10s %10s\n", "LOD %", "priority", "triangles", "vertices");
-        for (const LevelSummary& l : lods)
-          say("%6g %10zu %10zu %10zu\n", l.percent, l.priority, l.triangles, l.vertices);
-      }
-    }
-    if (model.has(LodStructure::kClusters)) {
-      const ClusterSummary c = describe_clusters(model);
-      const auto lods = summarize_levels(model, LodStructure::kClusters, percents);
-      if (args->json) {
-        nlohmann::ordered_json levels = nlohmann::ordered_json::array();
-        for (const LevelSummary& l : lods)
-          levels.push_back({{"percent", l.percent}, {"error", l.error}, {"clusters", l.clusters},
-                            {"triangles", l.triangles}, {"vertices", l.vertices}});
-        j["clusters"] = {{"clusters", c.clusters},
-                         {"groups", c.groups},
-                         {"levels", c.levels},
-                         {"full_triangles", c.full_triangles},
-                         {"stored_triangles", c.stored_triangles},
-                         {"coarsest_triangles", c.coarsest_triangles},
-                         {"levels_of_detail", levels}};
-      } else {
-        say("\nclusters: %zu clusters in %zu groups over %d levels; %zu triangles stored (%.2fx the full "
-                    "mesh's %lld); the coarsest cut has %lld\n",
-                    c.clusters, c.groups, c.levels, c.stored_triangles,
-                    c.full_triangles ? double(c.stored_triangles) / double(c.full_triangles) : 0.0,
-                    static_cast<long long>(c.full_triangles), static_cast<long long>(c.coarsest_triangles));
-        say("\n%6s %10s %10s %10s %10s\n", "LOD %", "error", "clusters", "triangles", "vertices");
-        for (const LevelSummary& l : lods)
-          say("%6g %10.3g %10zu %10zu %10zu\n", l.percent, l.error, l.clusters, l.triangles, l.vertices);
+        say("%s", info.text.c_str());
       }
     }
     if (args->json) std::printf("%s\n", j.dump(2).c_str());

@@ -48,7 +48,10 @@ std::string budget_shortfall(const LevelExtractor& extractor, const LevelRequest
   if (meets_budget(std::int64_t(cut.triangles.size()), request.triangles)) return "";
   const auto [under, over] = extractor.offered_around(request.triangles);
   const bool octree = extractor.structure() == LodStructure::kOctree;
-  std::string text = std::string("no ") + (octree ? "octree" : "cluster-hierarchy") + " level is within 10 % of " +
+  // Any other structure by the name the command line gives it.
+  const char* which =
+      extractor.structure() == LodStructure::kClusters ? "cluster-hierarchy" : structure_name(extractor.structure());
+  std::string text = std::string("no ") + which + " level is within 10 % of " +
                      std::to_string(request.triangles) + " triangles: ";
   if (under >= 0 && over >= 0)
     text += "the offered levels step from " + std::to_string(under) + " to " + std::to_string(over) + " there";

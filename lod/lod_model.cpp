@@ -3,29 +3,80 @@
 #include <scan2lod/core/compact_mesh.h>
 #include <scan2lod/core/error.h>
 #include <scan2lod/lod/clusters/paged_model.h>
-#include <scan2lod/lod/octree/extract.h>
+#include <scan2lod/lod/structure.h>
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <stdexcept>
 
 namespace scan2lod {
 
-const char* structure_name(LodStructure s) { return s == LodStructure::kOctree ? "octree" : "clusters"; }
+std::vector<const StructureKind*> structures_in_file_order() {
+  std::vector<const StructureKind*> kinds = registered_structures();
+  std::stable_sort(kinds.begin(), kinds.end(),
+                   [](const StructureKind* a, const StructureKind* b) { return a->first_major < b->first_major; });
+  return kinds;
+}
+
+const StructureKind& structure_kind(LodStructure id) {
+  for (const StructureKind* kind : registered_structures())
+    if (kind->id == id) return *kind;
+  throw std::logic_error("LOD structure " + std::to_string(int(id)) + " is not registered");
+}
+
+const char* structure_name(LodStructure s) { return structure_kind(s).name; }
 
 std::vector<std::string> structure_names() {
-  return {structure_name(LodStructure::kClusters), structure_name(LodStructure::kOctree)};
+  std::vector<std::string> names;
+  for (const StructureKind* kind : registered_structures()) names.push_back(kind->name);
+  return names;
 }
 
+bool LodModel::has(LodStructure s) const { return structure_kind(s).present(*this); }
+
 LodStructure default_structure(const LodModel& model) {
-  return model.clusters ? LodStructure::kClusters : LodStructure::kOctree;
+  for (const StructureKind* kind : registered_structures())
+    if (kind->present(model)) return kind->id;
+  return registered_structures().back()->id;
 }
+
+namespace {
+
+// "a, b or c": `items` as a sentence lists them.
+std::string spoken_list(const std::vector<const char*>& items, const char* conjunction) {
+  std::string text;
+  for (std::size_t i = 0; i < items.size(); ++i)
+    text += std::string(i == 0 ? "" : i + 1 == items.size() ? conjunction : ", ") + items[i];
+  return text;
+}
+
+// What the model holds, as a message says it: "both", "only the octree".
+std::string held_structures(const LodModel& model) {
+  std::vector<const char*> held;
+  for (const StructureKind* kind : registered_structures())
+    if (kind->present(model)) held.push_back(kind->phrase);
+  if (held.empty()) return "none";
+  if (held.size() == 1) return std::string("only ") + held[0];
+  if (held.size() == registered_structures().size()) return held.size() == 2 ? "both" : "all of them";
+  return spoken_list(held, " and ");
+}
+
+}  // namespace
 
 LodStructure structure_named(const LodModel& model, const std::string& name, const std::string& source) {
   LodStructure s = default_structure(model);
-  if (name == "clusters") s = LodStructure::kClusters;
-  else if (name == "octree") s = LodStructure::kOctree;
-  else if (!name.empty()) throw InputError("", "--structure must be clusters or octree, got '" + name + "'");
+  if (!name.empty()) {
+    std::vector<const char*> names;
+    const StructureKind* named = nullptr;
+    for (const StructureKind* kind : registered_structures()) {
+      names.push_back(kind->name);
+      if (name == kind->name) named = kind;
+    }
+    if (!named) throw InputError("", "--structure must be " + spoken_list(names, " or ") + ", got '" + name + "'");
+    s = named->id;
+  }
   require_structure(model, s, source);
   return s;
 }
@@ -33,101 +84,23 @@ LodStructure structure_named(const LodModel& model, const std::string& name, con
 void require_structure(const LodModel& model, LodStructure s, const std::string& source) {
   if (!model.has(s))
     throw InputError(source, std::string("the model has no ") + structure_name(s) + " structure (it holds " +
-                                 (model.octree && model.clusters ? "both"
-                                  : model.octree                 ? "only the octree"
-                                                                 : "only the cluster hierarchy") +
-                                 "); rebuild it with scan2lod build --structure " + structure_name(s) + " or both");
+                                 held_structures(model) + "); rebuild it with scan2lod build --structure " +
+                                 structure_name(s) + " or both");
 }
 
-LodModel model_from_octree(McOctree tree, LodArray lod) {
-  LodModel model;
-  model.vertices = std::move(tree.vertices);
-  tree.vertices = {};
-  model.octree = OctreeLod{std::move(tree), std::move(lod)};
-  return model;
-}
-
-namespace {
-
-// The vertices the hierarchy's collapses placed, after the model's: they were
-// numbered from its count. The hierarchy's range grows to take them in.
-void take_added_vertices(LodModel* model) {
-  ClusterHierarchy& h = *model->clusters;
-  VertexArray& v = model->vertices;
-  if (!h.added_positions.empty()) {
-    if (model->cluster_vertex_first + model->cluster_vertex_count != v.size())
-      model->cluster_vertex_count = v.size() - model->cluster_vertex_first;
-    v.positions.insert(v.positions.end(), h.added_positions.begin(), h.added_positions.end());
-    if (!v.normals.empty()) v.normals.insert(v.normals.end(), h.added_normals.begin(), h.added_normals.end());
-    if (!v.colors.empty()) v.colors.insert(v.colors.end(), h.added_colors.begin(), h.added_colors.end());
-    model->cluster_vertex_count += h.added_positions.size();
+void StructureInfo::say(const char* format, ...) {
+  va_list args, copy;
+  va_start(args, format);
+  va_copy(copy, args);
+  const int n = std::vsnprintf(nullptr, 0, format, copy);
+  va_end(copy);
+  if (n > 0) {
+    const std::size_t at = text.size();
+    text.resize(at + std::size_t(n) + 1);
+    std::vsnprintf(text.data() + at, std::size_t(n) + 1, format, args);
+    text.resize(at + std::size_t(n));
   }
-  h.added_positions = {};
-  h.added_normals = {};
-  h.added_colors = {};
-}
-
-}  // namespace
-
-void add_cluster_hierarchy(LodModel* model, TriangleMesh&& mesh, bool shares_vertices, const ClusterOptions& options) {
-  VertexArray& v = model->vertices;
-  std::size_t first = 0;
-  const std::size_t count = mesh.positions.size();
-  if (shares_vertices) {
-    model->clusters = build_cluster_hierarchy(v.positions, v.normals, v.colors, std::move(mesh.triangles), options);
-    model->cluster_vertex_first = 0;
-    model->cluster_vertex_count = count;
-    take_added_vertices(model);
-    return;
-  }
-  if (v.positions.empty()) {
-    // The mesh's vertices become the model's, each array freed once copied
-    // (the model's arrays have their own allocator).
-    auto take = [](auto& to, auto& from) {
-      to.assign(from.begin(), from.end());
-      from = {};
-    };
-    take(v.positions, mesh.positions);
-    take(v.normals, mesh.normals);
-    take(v.colors, mesh.colors);
-  } else {
-    first = v.size();
-    // An attribute present on one side only is filled on the other, so that
-    // the arrays stay one per position.
-    const bool normals = !v.normals.empty() || !mesh.normals.empty();
-    const bool colors = !v.colors.empty() || !mesh.colors.empty();
-    v.positions.insert(v.positions.end(), mesh.positions.begin(), mesh.positions.end());
-    if (normals) {
-      v.normals.resize(first, Vec3f::Zero());
-      if (mesh.normals.empty()) v.normals.resize(v.size(), Vec3f::Zero());
-      else v.normals.insert(v.normals.end(), mesh.normals.begin(), mesh.normals.end());
-    }
-    if (colors) {
-      v.colors.resize(first, Rgb{200, 200, 200});
-      if (mesh.colors.empty()) v.colors.resize(v.size(), Rgb{200, 200, 200});
-      else v.colors.insert(v.colors.end(), mesh.colors.begin(), mesh.colors.end());
-    }
-  }
-  if (first > 0)
-    for (Triangle& t : mesh.triangles)
-      for (std::int32_t& i : t) i += std::int32_t(first);
-  model->clusters = build_cluster_hierarchy(v.positions, v.normals, v.colors, std::move(mesh.triangles), options);
-  model->cluster_vertex_first = first;
-  model->cluster_vertex_count = count;
-  take_added_vertices(model);
-}
-
-void add_cluster_hierarchy(LodModel* model, const TriangleMesh& mesh, bool shares_vertices,
-                           const ClusterOptions& options) {
-  if (shares_vertices) {
-    model->clusters = build_cluster_hierarchy(model->vertices.positions, model->vertices.normals,
-                                              model->vertices.colors, mesh.triangles, options);
-    model->cluster_vertex_first = 0;
-    model->cluster_vertex_count = mesh.positions.size();
-    take_added_vertices(model);
-    return;
-  }
-  add_cluster_hierarchy(model, TriangleMesh(mesh), false, options);
+  va_end(args);
 }
 
 static LevelRequest request_of(LevelRequest::Kind kind) {
@@ -169,71 +142,29 @@ LevelRequest LevelRequest::at_priority(std::size_t p) {
 
 LevelExtractor::LevelExtractor(const LodModel& model, LodStructure structure) : model_(&model), structure_(structure) {
   require_structure(model, structure, "");
-  if (structure == LodStructure::kClusters) table_ = cluster_cut_table(*model.clusters);
+  levels_ = structure_kind(structure).make_levels(model);
 }
 
-std::int64_t LevelExtractor::full_triangles() const {
-  return structure_ == LodStructure::kClusters ? model_->clusters->full_triangles
-                                               : model_->octree->lod.accumulated.back();
-}
+LevelExtractor::LevelExtractor(LevelExtractor&&) noexcept = default;
+LevelExtractor& LevelExtractor::operator=(LevelExtractor&&) noexcept = default;
+LevelExtractor::~LevelExtractor() = default;
 
-std::int64_t LevelExtractor::coarsest_triangles() const {
-  if (structure_ == LodStructure::kClusters) return table_.triangles.back();
-  const LodArray& lod = model_->octree->lod;
-  return lod.accumulated[priority_for_percent(lod, 0)];
-}
+std::int64_t LevelExtractor::full_triangles() const { return levels_->full_triangles(); }
+
+std::int64_t LevelExtractor::coarsest_triangles() const { return levels_->coarsest_triangles(); }
 
 std::pair<std::int64_t, std::int64_t> LevelExtractor::offered_around(std::int64_t triangles) const {
   std::int64_t under = -1, over = -1;
-  auto see = [&](std::int64_t count) {
+  for (const std::int64_t count : levels_->offered_triangles()) {
     if (count <= triangles) under = std::max(under, count);
     else if (over < 0 || count < over) over = count;
-  };
-  if (structure_ == LodStructure::kClusters) {
-    for (const std::int64_t count : table_.triangles) see(count);
-  } else {
-    const LodArray& lod = model_->octree->lod;
-    for (const std::size_t p : monotone_priorities(lod)) see(lod.accumulated[p]);
   }
   return {under, over};
 }
 
-int LevelExtractor::levels() const {
-  return structure_ == LodStructure::kClusters ? model_->clusters->levels() : model_->octree->tree.depth + 1;
-}
+int LevelExtractor::levels() const { return levels_->levels(); }
 
-std::vector<std::uint8_t> LevelExtractor::triangle_levels() const {
-  std::vector<std::uint8_t> out;
-  out.reserve(cut_.triangles.size());
-  if (structure_ == LodStructure::kClusters) {
-    for (std::int32_t c : selected_) {
-      const Cluster& cl = model_->clusters->clusters[std::size_t(c)];
-      out.insert(out.end(), cl.triangle_count, cl.level);
-    }
-  } else {
-    out.assign(cut_.triangles.size(), 0);
-  }
-  return out;
-}
-
-std::size_t LevelExtractor::octree_priority(const LevelRequest& request) const {
-  const LodArray& lod = model_->octree->lod;
-  using Kind = LevelRequest::Kind;
-  switch (request.kind) {
-    case Kind::kPercent: return priority_for_percent(lod, request.percent);
-    case Kind::kTriangles:
-      return request.strict ? priority_for_triangles(lod, request.triangles) : priority_for_budget(lod, request.triangles);
-    case Kind::kPriority:
-      if (request.priority > lod.full())
-        throw InputError("", "priority " + std::to_string(request.priority) + " is past the octree's " +
-                                 std::to_string(lod.full()) + " expansions");
-      return request.priority;
-    case Kind::kError:
-    case Kind::kCamera: break;
-  }
-  throw InputError("", "the octree offers levels by percent, triangles or priority, not by error or camera; "
-                       "use --structure clusters");
-}
+std::vector<std::uint8_t> LevelExtractor::triangle_levels() const { return levels_->triangle_levels(cut_); }
 
 const LevelCut& LevelExtractor::extract(const LevelRequest& request) {
   using clock = std::chrono::steady_clock;
@@ -243,44 +174,9 @@ const LevelCut& LevelExtractor::extract(const LevelRequest& request) {
   cut_.clusters = 0;
   cut_.priority = 0;
   cut_.error = 0;
-  using Kind = LevelRequest::Kind;
-  if (structure_ == LodStructure::kOctree) {
-    const OctreeLod& o = *model_->octree;
-    const std::size_t p = octree_priority(request);
-    cut_.select_seconds = std::chrono::duration<double>(clock::now() - start).count();
-    extract_lod(o.tree, o.lod, p, &expanded_, &cut_.triangles);
-    cut_.priority = p;
-    cut_.percent = o.lod.full() ? 100.0 * double(p) / double(o.lod.full()) : 100.0;
-  } else {
-    const ClusterHierarchy& h = *model_->clusters;
-    switch (request.kind) {
-      case Kind::kPercent: {
-        const double share = std::clamp(request.percent, 0.0, 100.0) / 100.0;
-        cut_.error = error_for_triangles(table_, std::int64_t(std::floor(share * double(h.full_triangles))));
-        select_clusters_by_error(h, float(cut_.error), &selected_);
-        break;
-      }
-      case Kind::kTriangles:
-        cut_.error = request.strict ? error_for_triangles(table_, request.triangles)
-                                    : error_for_budget(table_, request.triangles);
-        select_clusters_by_error(h, float(cut_.error), &selected_);
-        break;
-      case Kind::kError:
-        cut_.error = request.error;
-        select_clusters_by_error(h, float(request.error), &selected_);
-        break;
-      case Kind::kCamera:
-        select_clusters_for_view(h, request.camera, float(request.pixel_error), &projected_, &selected_);
-        break;
-      case Kind::kPriority:
-        throw InputError("", "the cluster hierarchy has no priority numbers; ask by percent, triangles, error or "
-                             "camera, or use --structure octree");
-    }
-    cut_.select_seconds = std::chrono::duration<double>(clock::now() - start).count();
-    emit_clusters(h, selected_, &cut_.triangles);
-    cut_.clusters = selected_.size();
-    cut_.percent = h.full_triangles ? 100.0 * double(cut_.triangles.size()) / double(h.full_triangles) : 100.0;
-  }
+  levels_->select(request, &cut_);
+  cut_.select_seconds = std::chrono::duration<double>(clock::now() - start).count();
+  levels_->emit(&cut_);
   cut_.extract_seconds = std::chrono::duration<double>(clock::now() - start).count();
   return cut_;
 }
@@ -297,44 +193,6 @@ TriangleMesh compact_level(const LodModel& model, const std::vector<Triangle>& t
 Aabb model_bounds(const LodModel& model) {
   if (model.clusters && model.clusters->paged) return model.clusters->paged->bounds();
   return bounds(model.vertices.positions);
-}
-
-OctreeSummary describe_octree(const LodModel& model) {
-  require_structure(model, LodStructure::kOctree, "");
-  const McOctree& t = model.octree->tree;
-  const LodArray& lod = model.octree->lod;
-  OctreeSummary s;
-  s.resolution = t.grid.resolution;
-  s.depth = t.depth;
-  s.cube_size = t.grid.cube_size;
-  s.origin = t.grid.origin;
-  s.nodes = t.size();
-  s.nodes_per_level.assign(std::size_t(t.depth) + 1, 0);
-  for (std::size_t n = 0; n < t.size(); ++n) {
-    ++s.nodes_per_level[t.nodes.levels[n]];
-    s.leaves += t.is_leaf(n);
-  }
-  s.expansions = lod.full();
-  s.pinned = lod.pinned;
-  s.pinned_triangles = lod.accumulated[lod.pinned];
-  s.full_triangles = lod.accumulated.back();
-  const std::vector<std::size_t> offered = monotone_priorities(lod);
-  s.offered_levels = offered.size();
-  s.coarsest_triangles = lod.accumulated[offered.front()];
-  return s;
-}
-
-ClusterSummary describe_clusters(const LodModel& model) {
-  require_structure(model, LodStructure::kClusters, "");
-  const ClusterHierarchy& h = *model.clusters;
-  ClusterSummary s;
-  s.clusters = h.size();
-  s.groups = h.groups.size();
-  s.stored_triangles = h.stored_triangles();
-  s.levels = h.levels();
-  s.full_triangles = h.full_triangles;
-  s.coarsest_triangles = LevelExtractor(model, LodStructure::kClusters).coarsest_triangles();
-  return s;
 }
 
 std::vector<LevelSummary> summarize_levels(const LodModel& model, LodStructure structure,

@@ -9,7 +9,10 @@
 //   lod/octree/mc_octree.h, lod/octree/lod_array.h, lod/octree/extract.h;
 // - the cluster hierarchy (Cignoni et al., *Batched Multi-Triangulation*,
 //   2005): lod/clusters/cluster_hierarchy.h, lod/clusters/cluster_cut.h.
-// A level of either is an index buffer into the model's vertices.
+// A level of either is an index buffer into the model's vertices. Each
+// structure implements lod/structure.h in its own room, and
+// lod/registered_structures.cpp lists them: what is generic walks that list
+// (lod/structure.h says what).
 #pragma once
 
 #include <scan2lod/core/types.h>
@@ -19,6 +22,7 @@
 #include <scan2lod/lod/octree/mc_octree.h>
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -26,12 +30,13 @@
 
 namespace scan2lod {
 
+// One per registered structure.
 enum class LodStructure { kOctree, kClusters };
 
 // "octree" or "clusters", as the command line spells them.
 const char* structure_name(LodStructure s);
-// Every structure's name, in the order the command line offers them: what
-// its --structure options accept, so that a new structure is named here once.
+// Every registered structure's name, in the order the command line offers
+// them: what its --structure options accept.
 std::vector<std::string> structure_names();
 
 // The octree with its priority numbering. Its vertices live in the model's
@@ -54,14 +59,14 @@ struct LodModel {
   // What the cluster hierarchy indexes: vertices [first, first + count).
   std::size_t cluster_vertex_first = 0, cluster_vertex_count = 0;
 
-  bool has(LodStructure s) const { return s == LodStructure::kOctree ? octree.has_value() : clusters.has_value(); }
+  bool has(LodStructure s) const;
 };
 
-// The structure used when none is named: the cluster hierarchy when the model
-// has one (it is the more faithful), else the octree.
+// The structure used when none is named: the first registered one the model
+// has (the cluster hierarchy, the more faithful, before the octree).
 LodStructure default_structure(const LodModel& model);
 
-// The structure `name` ("clusters", "octree", or empty for the default) of
+// The structure `name` (one of structure_names(), or empty for the default) of
 // `model`. Throws InputError for another name or a structure the model lacks.
 LodStructure structure_named(const LodModel& model, const std::string& name, const std::string& source);
 
@@ -104,6 +109,8 @@ struct LevelRequest {
   static LevelRequest at_priority(std::size_t p);
 };
 
+class StructureLevels;  // lod/structure.h
+
 // One level: an index buffer into the model's vertices, and how it was chosen.
 struct LevelCut {
   LodStructure structure = LodStructure::kClusters;
@@ -122,6 +129,9 @@ class LevelExtractor {
  public:
   // Throws InputError if the model lacks `structure`.
   LevelExtractor(const LodModel& model, LodStructure structure);
+  LevelExtractor(LevelExtractor&&) noexcept;
+  LevelExtractor& operator=(LevelExtractor&&) noexcept;
+  ~LevelExtractor();
   // Throws InputError for a request the structure does not offer (an error or
   // camera for the octree, a priority for the clusters, a priority past the
   // LOD array's end).
@@ -149,10 +159,7 @@ class LevelExtractor {
   const LodModel* model_;
   LodStructure structure_;
   LevelCut cut_;
-  std::vector<std::uint8_t> expanded_;          // octree scratch
-  ClusterCutTable table_;                       // clusters
-  std::vector<float> projected_;
-  std::vector<std::int32_t> selected_;
+  std::unique_ptr<StructureLevels> levels_;  // the structure's own, with its scratch and tables
 };
 
 // A self-contained mesh of one level's triangles: only the vertices they use.

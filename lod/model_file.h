@@ -106,10 +106,12 @@
 //         where its geometry lies in PGEO, its checksum and box
 //   PGEO  bytes: each page's triangles over a vertex table of its own
 //         (lod/clusters/page_geometry.h), so that a viewer reads a page in one read
-// Every section is listed once, in kSections (model_file.cpp), with the
-// formats that hold it: the writer and the reader both walk that table. A new
-// array is a new row there (and, if it must agree with others, a check in the
-// decoder). When older readers can still draw the model without it, the
+// Every section is listed once, with the formats that hold it: the shared
+// vertices' in model_file.cpp, each structure's in its part
+// (lod/model_sections.h: lod/octree/octree_sections.cpp,
+// lod/clusters/cluster_sections.cpp). The writer and the reader both walk those
+// tables, structure by structure. A new array is a new row there (and, if it
+// must agree with others, a check in that part's decode). When older readers can still draw the model without it, the
 // writer marks it optional and bumps the minor version; otherwise it is
 // required and the major version goes up.
 #pragma once

@@ -36,6 +36,9 @@ std::string percent_shortfall(const LodModel& model, LodStructure structure, con
               (meets_budget(over, want) ? ", which --triangles " + std::to_string(want) + " takes" : "");
     return text;
   }
+  // What a percent means is each structure's own; one not named here is not
+  // checked.
+  if (structure != LodStructure::kOctree) return "";
   const std::int64_t expansions = std::int64_t(model.octree->lod.full());
   const auto want = std::int64_t(std::llround(percent / 100.0 * double(expansions)));
   if (want <= 0 || meets_budget(std::int64_t(cut.priority), want)) return "";

@@ -6,6 +6,7 @@
 #include <scan2lod/lod/level_choice.h>
 #include <scan2lod/lod/model_file.h>
 #include <scan2lod/lod/percent_shortfall.h>
+#include <scan2lod/lod/structure.h>
 #include <scan2lod/pipeline/build_model.h>
 #include <scan2lod/python/bindings.h>
 #include <scan2lod/python/errors.h>
@@ -180,10 +181,10 @@ clusters when the model has them).
           py::arg("path"), "Writes the model to a .mco file, as `scan2lod build -o` does.")
       .def("__repr__", [](const Model& self) {
         std::string text = "<scan2lod.Model: " + std::to_string(self.model->vertices.size()) + " vertices";
-        if (self.model->has(LodStructure::kClusters))
-          text += ", clusters of " + std::to_string(describe_clusters(*self.model).full_triangles) + " triangles";
-        if (self.model->has(LodStructure::kOctree))
-          text += ", octree of " + std::to_string(describe_octree(*self.model).full_triangles) + " triangles";
+        for (const StructureKind* kind : registered_structures())
+          if (kind->present(*self.model))
+            text += std::string(", ") + kind->name + " of " +
+                    std::to_string(LevelExtractor(*self.model, kind->id).full_triangles()) + " triangles";
         return text + ">";
       });
 
