@@ -10,16 +10,15 @@ set(SCAN2LOD_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/scan2lod)
 
 install(TARGETS scan2lod_runtime EXPORT scan2lodTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
-# The runtime's headers and the plain-data headers they include.
+# The runtime's headers and the plain-data headers they include; lod/ and its
+# rooms list theirs where their sources are (SCAN2LOD_INSTALLED_HEADERS).
+get_property(lod_headers GLOBAL PROPERTY SCAN2LOD_INSTALLED_HEADERS)
 foreach(header
     core/types.h core/array_view.h core/large_array.h core/progress.h core/error.h core/mesh_edges.h
     core/parallel_jobs.h core/flat_hash.h
     io/atomic_file.h io/gltf_file.h
     delivery/tileset.h delivery/tile_glb.h delivery/tile_tree.h
-    lod/lod_model.h lod/model_file.h lod/level_budget.h
-    lod/octree/mc_octree.h lod/octree/lod_array.h lod/octree/extract.h lod/octree/transition.h lod/octree/lod_cursor.h
-    lod/clusters/cluster_hierarchy.h lod/clusters/cluster_cut.h lod/clusters/page_geometry.h
-    lod/clusters/paged_model.h lod/clusters/paged_view.h
+    ${lod_headers}
     reconstruct/marching_cubes.h reconstruct/signed_distance.h reconstruct/cube_grid.h reconstruct/cube_table.h)
   get_filename_component(folder ${header} DIRECTORY)
   install(FILES ${header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/scan2lod/${folder})

@@ -10,16 +10,14 @@
 // - the cluster hierarchy (Cignoni et al., *Batched Multi-Triangulation*,
 //   2005): lod/clusters/cluster_hierarchy.h, lod/clusters/cluster_cut.h.
 // A level of either is an index buffer into the model's vertices. Each
-// structure implements lod/structure.h in its own room, and
-// lod/registered_structures.cpp lists them: what is generic walks that list
-// (lod/structure.h says what).
+// structure implements lod/structure.h in its own room, and the registration
+// (lod/registered_structures.h and .cpp) names it and lists it: what is
+// generic walks that list (lod/structure.h says what).
 #pragma once
 
 #include <scan2lod/core/types.h>
 #include <scan2lod/lod/clusters/cluster_cut.h>
-#include <scan2lod/lod/clusters/cluster_hierarchy.h>
-#include <scan2lod/lod/octree/lod_array.h>
-#include <scan2lod/lod/octree/mc_octree.h>
+#include <scan2lod/lod/registered_structures.h>
 
 #include <cstdint>
 #include <memory>
@@ -30,23 +28,14 @@
 
 namespace scan2lod {
 
-// One per registered structure.
-enum class LodStructure { kOctree, kClusters };
-
 // "octree" or "clusters", as the command line spells them.
 const char* structure_name(LodStructure s);
 // Every registered structure's name, in the order the command line offers
 // them: what its --structure options accept.
 std::vector<std::string> structure_names();
 
-// The octree with its priority numbering. Its vertices live in the model's
-// VertexArray (tree.vertices is left empty there).
-struct OctreeLod {
-  McOctree tree;
-  LodArray lod;
-};
-
-struct LodModel {
+// The structures' members (octree, clusters) come from the registration.
+struct LodModel : RegisteredStructures {
   VertexArray vertices;
   // The point of the inputs' own frame that the vertices are relative to:
   // input frame = origin + position, added in double (AcquisitionReport::
@@ -54,8 +43,6 @@ struct LodModel {
   // float cannot hold; writers given it (MeshWriteOptions::origin) put levels
   // back in the inputs' frame. Not the octree's grid origin (McOctree::grid).
   Vec3d origin = Vec3d::Zero();
-  std::optional<OctreeLod> octree;
-  std::optional<ClusterHierarchy> clusters;
   // What the cluster hierarchy indexes: vertices [first, first + count).
   std::size_t cluster_vertex_first = 0, cluster_vertex_count = 0;
 

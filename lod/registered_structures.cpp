@@ -1,4 +1,5 @@
-// THE registration: every LOD structure the face offers (lod/structure.h).
+// The registration (with registered_structures.h): every LOD structure the
+// face offers (lod/structure.h).
 // A new structure implements StructureKind in its own room and is listed
 // here once.
 #include <scan2lod/lod/structure.h>

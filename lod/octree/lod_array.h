@@ -59,4 +59,12 @@ std::size_t priority_for_triangles(const LodArray& lod, std::int64_t triangles);
 // the budget, the next offered level when it is at most 10 % over.
 std::size_t priority_for_budget(const LodArray& lod, std::int64_t triangles);
 
+// The octree with its priority numbering, as a model (lod/lod_model.h) holds
+// it: its vertices live in the model's VertexArray (tree.vertices is left
+// empty there).
+struct OctreeLod {
+  McOctree tree;
+  LodArray lod;
+};
+
 }  // namespace scan2lod
