@@ -4,6 +4,7 @@
 #include <scan2lod/core/error.h>
 #include <scan2lod/core/mesh_edges.h>
 #include <scan2lod/lod/level_budget.h>
+#include <scan2lod/lod/structure.h>
 
 #include <algorithm>
 #include <cmath>
@@ -48,10 +49,8 @@ std::string budget_shortfall(const LevelExtractor& extractor, const LevelRequest
   if (meets_budget(std::int64_t(cut.triangles.size()), request.triangles)) return "";
   const auto [under, over] = extractor.offered_around(request.triangles);
   const bool octree = extractor.structure() == LodStructure::kOctree;
-  // Any other structure by the name the command line gives it.
-  const char* which =
-      extractor.structure() == LodStructure::kClusters ? "cluster-hierarchy" : structure_name(extractor.structure());
-  std::string text = std::string("no ") + which + " level is within 10 % of " +
+  std::string text = std::string("no ") + structure_kind(extractor.structure()).level_noun +
+                     " level is within 10 % of " +
                      std::to_string(request.triangles) + " triangles: ";
   if (under >= 0 && over >= 0)
     text += "the offered levels step from " + std::to_string(under) + " to " + std::to_string(over) + " there";

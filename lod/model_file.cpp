@@ -329,7 +329,6 @@ class Decoder final : public SectionReader {
   std::size_t vertices_ = 0;
 };
 
-
 // Header: what the file is, before anything is trusted.
 void Decoder::read_header() {
   if (size_ == 0) fail("not a scan2lod model (.mco): the file is empty");
@@ -438,8 +437,6 @@ void Decoder::read_rows(const std::vector<SectionRow>& rows, LodModel* model) {
   }
 }
 
-
-
 // Optional (added in 4.5): without it the vertices are in the inputs' frame.
 void Decoder::read_origin(LodModel* model) {
   if (!has("ORGN")) return;
@@ -458,7 +455,6 @@ void Decoder::check_vertices(const LodModel& model) const {
   if (!model.vertices.colors.empty() && model.vertices.colors.size() != vertices)
     bad(std::to_string(model.vertices.colors.size()) + " colours for " + std::to_string(vertices) + " vertices");
 }
-
 
 // Paged: `n` bytes from `offset` of the file; false when the file is shorter.
 bool read_at(int fd, std::uint64_t offset, std::size_t n, std::uint8_t* into) {
@@ -544,7 +540,6 @@ LodModel Decoder::decode() {
   }
   return model;
 }
-
 
 }  // namespace
 

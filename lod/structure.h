@@ -61,6 +61,7 @@ struct StructureKind {
   LodStructure id;
   const char* name;    // as the command line spells it: "octree"
   const char* phrase;  // in messages: "the octree"
+  const char* level_noun;  // a level of it, in messages: "no octree level is ..."
   // The model-file format that first held it: structures lay out their
   // sections in the order they joined the format.
   std::uint32_t first_major;

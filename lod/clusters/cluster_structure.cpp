@@ -202,6 +202,7 @@ const StructureKind& cluster_structure() {
       LodStructure::kClusters,
       "clusters",
       "the cluster hierarchy",
+      "cluster-hierarchy",
       3,
       [](const LodModel& model) { return model.clusters.has_value(); },
       [](const LodModel& model) -> std::unique_ptr<StructureLevels> {

@@ -141,6 +141,7 @@ const StructureKind& octree_structure() {
       LodStructure::kOctree,
       "octree",
       "the octree",
+      "octree",
       1,
       [](const LodModel& model) { return model.octree.has_value(); },
       [](const LodModel& model) -> std::unique_ptr<StructureLevels> {
