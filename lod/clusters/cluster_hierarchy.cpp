@@ -8,6 +8,7 @@
 #include <scan2lod/lod/clusters/cluster_partition.h>
 #include <scan2lod/lod/clusters/group_clustering.h>
 #include <scan2lod/lod/clusters/group_simplify.h>
+#include <scan2lod/lod/clusters/group_vertices.h>
 #include <scan2lod/lod/clusters/hierarchy_ranks.h>
 #include <scan2lod/lod/clusters/paged_model.h>
 #include <scan2lod/lod/clusters/triangle_spool.h>
@@ -100,9 +101,7 @@ Sphere enclosing_sphere(const std::vector<Sphere>& spheres) {
 // Buffers of the meshlet builder, kept per thread across groups: fresh ones
 // for every group were page faults on every call.
 struct MeshletScratch {
-  std::vector<std::int32_t> used;   // the group's vertices, in order of first use
-  std::vector<std::int32_t> local;  // global vertex -> index in used; -1 between groups
-  std::vector<std::int32_t> local_placed;  // the same for the group's placed vertices
+  GroupVertices used;  // the group's vertices, placed ones too, in order of first use
   std::vector<Vec3f> local_positions;
   std::vector<unsigned> indices;
   std::vector<meshopt_Meshlet> meshlets;
@@ -131,22 +130,15 @@ struct SplitGroup {
 std::vector<std::int32_t> meshlet_parts(const JoinedView<Vec3f>& positions, const std::vector<Vec3f>& placed,
                                         std::vector<Triangle>* triangles, int cluster_triangles, int* parts) {
   thread_local MeshletScratch s;
-  if (s.local.size() < positions.size()) s.local.assign(positions.size(), -1);
-  s.local_placed.assign(placed.size(), -1);
   s.used.clear();
   s.indices.resize(3 * triangles->size());
   for (std::size_t t = 0; t < triangles->size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      const std::int32_t v = (*triangles)[t][std::size_t(k)];
-      std::int32_t& l = v >= 0 ? s.local[std::size_t(v)] : s.local_placed[std::size_t(-1 - v)];
-      if (l < 0) l = std::int32_t(s.used.size()), s.used.push_back(v);
-      s.indices[3 * t + std::size_t(k)] = unsigned(l);
-    }
-  s.local_positions.resize(s.used.size());
-  for (std::size_t i = 0; i < s.used.size(); ++i) {
-    const std::int32_t v = s.used[i];
+    for (int k = 0; k < 3; ++k) s.indices[3 * t + std::size_t(k)] = unsigned(s.used.local((*triangles)[t][std::size_t(k)]));
+  const std::vector<std::int32_t>& used = s.used.global();
+  s.local_positions.resize(used.size());
+  for (std::size_t i = 0; i < used.size(); ++i) {
+    const std::int32_t v = used[i];
     s.local_positions[i] = v >= 0 ? positions[std::size_t(v)] : placed[std::size_t(-1 - v)];
-    if (v >= 0) s.local[std::size_t(v)] = -1;
   }
   const std::size_t max_triangles = std::size_t(std::clamp(cluster_triangles / 4 * 4, 4, 512));
   const std::size_t max_vertices = 255;
@@ -165,7 +157,7 @@ std::vector<std::int32_t> meshlet_parts(const JoinedView<Vec3f>& positions, cons
     for (unsigned t = 0; t < ml.triangle_count; ++t) {
       const unsigned char* corner = &s.meshlet_triangles[ml.triangle_offset + 3 * t];
       Triangle& out = (*triangles)[at++];
-      for (int k = 0; k < 3; ++k) out[std::size_t(k)] = s.used[s.meshlet_vertices[ml.vertex_offset + corner[k]]];
+      for (int k = 0; k < 3; ++k) out[std::size_t(k)] = used[s.meshlet_vertices[ml.vertex_offset + corner[k]]];
       part.push_back(std::int32_t(m));
     }
   }
@@ -199,17 +191,30 @@ constexpr std::size_t kSplitRun = std::size_t(1) << 20;
 // a core.
 constexpr std::size_t kSmallestRun = std::size_t(1) << 16;
 
-// Runs work(i) for i in [0, count) on `threads` threads.
+// Runs work(i) for i in [0, count) on `threads` threads: OpenMP's, which
+// live from call to call, so that the simplifiers' per-thread scratch (a
+// group's quadrics, about a megabyte) is made once a thread, not once a
+// round. Fresh threads each round made it anew: page faults on every round
+// of every block.
+// The first exception a job throws is rethrown once all have stopped.
 template <class Work>
 void on_threads(std::size_t count, int threads, Work work) {
+  if (threads <= 1 || count <= 1) {
+    for (std::size_t i = 0; i < count; ++i) work(i);
+    return;
+  }
   std::atomic<std::size_t> next{0};
-  auto run = [&] {
+  std::exception_ptr failure;
+  std::mutex mutex;
+#pragma omp parallel num_threads(threads)
+  try {
     for (std::size_t i; (i = next++) < count;) work(i);
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(run);
-  run();
-  for (std::thread& t : pool) t.join();
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!failure) failure = std::current_exception();
+    next = count;
+  }
+  if (failure) std::rethrow_exception(failure);
 }
 
 // Triangles cut into clusters run by run, each run [starts[r], starts[r + 1])

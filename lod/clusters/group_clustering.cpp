@@ -2,6 +2,7 @@
 
 #include <scan2lod/core/point_triangle.h>
 #include <scan2lod/core/union_find.h>
+#include <scan2lod/lod/clusters/group_vertices.h>
 
 #include <algorithm>
 #include <array>
@@ -62,18 +63,14 @@ bool contains(const std::vector<std::uint64_t>& sorted, std::uint64_t key) {
 
 // Phase 1: local indices, pieces, edges and the vertices clustering must not move.
 void load(const std::vector<Triangle>& triangles, const SimplifyInput& in, ClusterSoundness soundness,
-          std::vector<int>& local, Group* g) {
+          Group* g) {
+  thread_local GroupVertices local;
+  local.clear();
   for (const Triangle& t : triangles) {
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-    std::array<std::int32_t, 3> l;
-    for (int k = 0; k < 3; ++k) {
-      int& i = local[std::size_t(t[std::size_t(k)])];
-      if (i < 0) i = int(g->global.size()), g->global.push_back(t[std::size_t(k)]);
-      l[std::size_t(k)] = i;
-    }
-    g->tris.push_back(l);
+    g->tris.push_back({local.local(t[0]), local.local(t[1]), local.local(t[2])});
   }
-  for (std::int32_t v : g->global) local[std::size_t(v)] = -1;
+  g->global = local.global();
   const std::size_t nv = g->global.size();
   g->p.resize(nv);
   for (std::size_t v = 0; v < nv; ++v) {
@@ -384,9 +381,8 @@ double cluster_error(const Group& g, const Clustering& c) {
 
 SimplifiedGroup cluster_group(const std::vector<Triangle>& triangles, std::size_t target, const SimplifyInput& in,
                               ClusterSoundness soundness) {
-  std::vector<int>& local = group_local_index(in.positions.size());
   Group g;
-  load(triangles, in, soundness, local, &g);
+  load(triangles, in, soundness, &g);
   SimplifiedGroup best;
   best.triangles = triangles;
   if (g.tris.empty() || !(g.mean_edge > 0)) return best;

@@ -1,6 +1,7 @@
 #include <scan2lod/lod/clusters/group_simplify.h>
 
 #include <scan2lod/core/point_triangle.h>
+#include <scan2lod/lod/clusters/group_vertices.h>
 
 #include <algorithm>
 #include <array>
@@ -305,29 +306,19 @@ double removed_vertex_distance(GroupTopology& g, std::vector<int>& moved_to, con
 
 }  // namespace
 
-std::vector<int>& group_local_index(std::size_t vertices) {
-  thread_local std::vector<int> map;
-  if (map.size() < vertices) map.assign(vertices, -1);
-  return map;
-}
-
 // Phase 1: the group's triangles in local indices, with their incidence and
 // which vertices are locked or on the border. Returns local -> global.
 std::vector<std::int32_t> load_group(const std::vector<Triangle>& triangles, const SimplifyInput& in,
-                                     std::vector<int>& local, GroupTopology* group) {
+                                     GroupTopology* group) {
   GroupTopology& g = *group;
   g.tris.clear();
-  std::vector<std::int32_t> global;
+  thread_local GroupVertices local;
+  local.clear();
   for (const Triangle& t : triangles) {
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-    std::array<int, 3> l;
-    for (int k = 0; k < 3; ++k) {
-      int& i = local[std::size_t(t[std::size_t(k)])];
-      if (i < 0) i = int(global.size()), global.push_back(t[std::size_t(k)]);
-      l[std::size_t(k)] = i;
-    }
-    g.tris.push_back(l);
+    g.tris.push_back({local.local(t[0]), local.local(t[1]), local.local(t[2])});
   }
+  std::vector<std::int32_t> global = local.global();
   const std::size_t nv = global.size();
   g.dead.assign(g.tris.size(), 0);
   if (g.incident.size() < nv) g.incident.resize(nv);
@@ -549,8 +540,7 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
   thread_local GroupQuadrics q;  // reused: a group's quadrics are about a megabyte
   thread_local std::vector<std::array<double, kMaxDim>> origin;
   thread_local std::vector<std::uint8_t> moved;
-  std::vector<int>& local = group_local_index(in.positions.size());
-  const std::vector<std::int32_t> global = load_group(triangles, in, local, &g);
+  const std::vector<std::int32_t> global = load_group(triangles, in, &g);
   group_quadrics(g, global, in, use_normals, use_colors, &q);
   origin = q.x;
   std::vector<int> moved_to = collapse_to_target(target, in.optimal_placement, &g, &q, &moved);
@@ -592,7 +582,6 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
     out.triangles.push_back(tri);
   }
   out.error = float(removed_vertex_distance(g, moved_to, moved, origin, q.x) / in.scale);
-  for (std::int32_t v : global) local[std::size_t(v)] = -1;
   return out;
 }
 

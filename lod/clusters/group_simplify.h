@@ -50,9 +50,4 @@ struct SimplifiedGroup {
 SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size_t target,
                                const SimplifyInput& input);
 
-// Per-thread scratch of the group simplifiers: global vertex -> group vertex,
-// at least `vertices` long and all -1 between groups (one per thread, shared
-// by both simplifiers: at 10^8 points it is 100 MB).
-std::vector<int>& group_local_index(std::size_t vertices);
-
 }  // namespace scan2lod
