@@ -128,6 +128,17 @@ void refuse_what_the_machine_cannot_hold(const BrickPlan& plan, const BuildOptio
                            "--resolution " + std::to_string(fits) + " would need about " + binary_size(at));
 }
 
+// A build under a budget: every array of a megabyte or more in a mapping of
+// its own from here on, so that freed it goes back to the system at once.
+// glibc's default raises that threshold to 32 MiB as large blocks are freed,
+// and the arrays the weld and the hierarchy grow by doubling then fragment
+// the heap: the pair's 1 M points at R = 1024 under 400M peaked at 347 MiB,
+// against 285 MiB with this, for 0.75 M more page faults (1 s of the 2
+// cores' 35 s). Set from the start when a budget is given (the points'
+// arrays freed raise the threshold first), else once bricks are chosen. The
+// setting is the process's, and stays.
+void hand_large_arrays_back_when_freed() { mallopt(M_MMAP_THRESHOLD, 1 << 20); }
+
 // Phase 2: the strategy, from the in-core estimate against the budget.
 // Spooled points go by bricks: they took a quarter of the budget alone.
 bool choose_bricks(const OrientedPoints* points, const BuildOptions& options, double budget, BuildReport* report) {
@@ -189,6 +200,7 @@ Reconstruction reconstruct_budgeted(const OrientedPoints* points, const PointSpo
     report->warnings.push_back("the welded surface will need about " + binary_size(report->plan.weld_bytes) +
                                ", over the budget of " + binary_size(budget) +
                                ": the bricks keep to it, the weld of their surfaces is not out of core yet");
+  hand_large_arrays_back_when_freed();
   return spool ? reconstruct_in_bricks(*spool, options.reconstruct, bricks, &report->bricks, &report->plan)
                : reconstruct_in_bricks(*points, options.reconstruct, bricks, &report->bricks, &report->plan);
 }
@@ -470,6 +482,7 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
 
 void serve_build(const std::vector<std::string>& inputs, const BuildOptions& options) {
   AcquisitionReport report;
+  if (options.memory_bytes > 0) hand_large_arrays_back_when_freed();
   InputPoints points = load_within_budget(inputs, options, &report);
   BrickOptions bricks;
   bricks.work_dir = options.work_dir;
@@ -501,6 +514,7 @@ LodModel build_model(const std::vector<std::string>& inputs, const BuildOptions&
   BuildReport& report = report_out ? *report_out : local;
   const auto start = Clock::now();
   BuildProgress progress(0.05, options.octree ? 4.0 : 0.0, options.clusters ? 1.6 : 0.0);
+  if (options.memory_bytes > 0) hand_large_arrays_back_when_freed();
   InputPoints points = load_within_budget(inputs, options, &report.acquisition);
   // Ranks that bin their shares plan with one budget: rank 0's, as measured when they met.
   BuildOptions planned = options;
