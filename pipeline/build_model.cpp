@@ -38,11 +38,6 @@ double peak_bytes() {
   return double(usage.ru_maxrss) * 1024.0;
 }
 
-// The cluster hierarchy in core: about 140 bytes a triangle of the full mesh
-// at its peak, with the mesh (bench/scale: 1027 MiB at 7.2 M triangles,
-// 3575 MiB at 29.1 M); a reconstruction gives about 2 triangles a cube.
-constexpr double kClusterBytesPerTriangle = 140.0;
-
 // The process's resident memory now.
 double resident_bytes() {
   long pages = 0, resident = 0;
@@ -53,24 +48,36 @@ double resident_bytes() {
   return double(resident) * double(sysconf(_SC_PAGESIZE));
 }
 
-// The cluster hierarchy in blocks: what stays in memory through the build is
-// the mesh's vertices and the hierarchy's per-vertex tables (about 45 bytes a
-// vertex, 0.5 vertices a triangle), the vertices its collapses place with
-// their tables (36 bytes, 0.3 a triangle: 958 k for 3.24 M triangles), the
-// full triangles until the first pass ends and two thirds of them carried
-// (20 bytes a triangle); what a block adds is
-// about kBlockBytesPerTriangle of its triangles (3.3 M triangles under a
-// 400 MiB budget: blocks of 354 k, peak 353 MiB, set in the weld). The rest
-// of the budget sizes the blocks, never below kSmallestBlock: a budget too
-// small for that is warned of, since the surface is made by then.
-constexpr double kBlockBytesPerTriangle = 400.0;
-// The finished clusters' triangles, held in memory when no spool takes them:
-// the hierarchy holds about 2.3 times the full detail, 12 bytes a triangle.
-constexpr double kHeldClusterBytesPerTriangle = 2.4 * 12.0;
+// The cluster stage's peak over the memory resident when it starts (which
+// holds the mesh), measured in bricks at 23fe5ae (the bunny's scans at
+// R = 256, 0.43 M triangles; the pair's 16 at R = 1024, 3.27 M; 9.8 M points
+// at R = 2048, 13.1 M): a fixed 17 MiB (threads and their scratch), and
+// - built whole, 119 bytes a triangle of the full mesh;
+// - in blocks, 36 bytes a triangle (the per-vertex tables, the vertices the
+//   collapses place, the triangles carried from pass to pass), 30 bytes a
+//   triangle of the block each lane works on, and 14 bytes a triangle more
+//   when the finished clusters stay in memory, not in a spool.
+// (Before, thread-local tables of every vertex, filled anew every round, cost
+// about 400 bytes a block triangle.) The rest of the budget sizes the
+// blocks, never below kSmallestBlock: a budget too small for that is warned
+// of, since the surface is made by then.
+constexpr double kClusterFixedBytes = 17.0 * (1 << 20);
+constexpr double kWholeBytesPerTriangle = 119.0;
+constexpr double kBlockedBytesPerTriangle = 36.0;
+constexpr double kBlockBytesPerTriangle = 30.0;
+constexpr double kHeldClusterBytesPerTriangle = 14.0;
 constexpr std::int64_t kSmallestBlock = 65536;
-// The cluster stage's peak in blocks of `block` triangles.
+// The mesh the stage starts from: 12 bytes a triangle, and half a vertex a
+// triangle with its position and normal.
+constexpr double kMeshBytesPerTriangle = 12.0 + 0.5 * 24.0;
+
+// The cluster stage's peak built whole, and in blocks of `block` triangles.
+double whole_cluster_bytes(std::size_t triangles) {
+  return resident_bytes() + kClusterFixedBytes + kWholeBytesPerTriangle * double(triangles);
+}
 double blocked_cluster_bytes(std::size_t triangles, std::int64_t block) {
-  return resident_bytes() + double(triangles) * (0.5 * 45.0 + 0.3 * 36.0 + 20.0) + double(block) * kBlockBytesPerTriangle;
+  return resident_bytes() + kClusterFixedBytes + kBlockedBytesPerTriangle * double(triangles) +
+         kBlockBytesPerTriangle * double(block);
 }
 
 std::int64_t cluster_block_for(double budget, std::size_t triangles, BuildReport* report) {
@@ -85,18 +92,19 @@ std::int64_t cluster_block_for(double budget, std::size_t triangles, BuildReport
 
 // The hierarchy's blocks (0: whole): as asked, else those of every build
 // (block_triangles_for), unless the budget cannot hold them; then the
-// largest it holds, and the hierarchy is not the one a larger budget makes.
+// largest it holds, no larger than the usual blocks, and the hierarchy is
+// not the one a larger budget makes.
 std::int64_t choose_cluster_block(std::int64_t asked, std::size_t triangles, double budget, BuildReport* report) {
   if (asked > 0) return asked;
   const std::int64_t block = block_triangles_for(kAutomaticBlocks, triangles);
-  const double needs = block > 0 ? blocked_cluster_bytes(triangles, block) : kClusterBytesPerTriangle * double(triangles);
+  const double needs = block > 0 ? blocked_cluster_bytes(triangles, block) : whole_cluster_bytes(triangles);
   if (needs <= budget) return block;
-  const std::int64_t held = cluster_block_for(budget, triangles, report);
+  const std::int64_t held = std::min(cluster_block_for(budget, triangles, report), kBlockTriangles);
   if (block > 0 && held >= block) return block;
-  if (block > 0)
-    report->warnings.push_back("the budget of " + binary_size(budget) + " holds cluster blocks of " +
-                               std::to_string(held) + " triangles, not " + std::to_string(block) +
-                               ": the hierarchy differs from the one a build with more memory makes");
+  report->warnings.push_back("the budget of " + binary_size(budget) + " holds cluster blocks of " +
+                             std::to_string(held) + " triangles, not " +
+                             (block > 0 ? std::to_string(block) : "the whole mesh") +
+                             ": the hierarchy differs from the one a build with more memory makes");
   return held;
 }
 
@@ -113,7 +121,9 @@ constexpr double kTrianglesPerCube = 1.9;
 void refuse_what_the_machine_cannot_hold(const BrickPlan& plan, const BuildOptions& options) {
   const double machine = machine_memory_bytes();
   const double triangles = kTrianglesPerCube * plan.cubes;
-  const double hierarchy = options.clusters ? blocked_cluster_bytes(std::size_t(triangles), kSmallestBlock) : 0.0;
+  const double hierarchy =
+      options.clusters ? blocked_cluster_bytes(std::size_t(triangles), kSmallestBlock) + kMeshBytesPerTriangle * triangles
+                       : 0.0;
   const double needs = std::max(plan.weld_bytes, hierarchy);
   if (needs <= machine) return;
   int fits = options.reconstruct.resolution;
@@ -422,7 +432,7 @@ LodModel build_from_points(const OrientedPoints* points, const PointSpool* spool
   // heaps keep some otherwise (34 MiB after a 7.2 M-triangle weld).
   malloc_trim(0);
   if (options.clusters) {
-    report.estimated_cluster_bytes = kClusterBytesPerTriangle * double(report.full_triangles);
+    report.estimated_cluster_bytes = whole_cluster_bytes(report.full_triangles);
     const double budget = report.budget_bytes > 0 ? report.budget_bytes : available_memory_bytes();
     report.cluster_block = choose_cluster_block(options.cluster_block, report.full_triangles, budget, &report);
     if (report.cluster_block > 0 && report.full_triangles > std::size_t(report.cluster_block))

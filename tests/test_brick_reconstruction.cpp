@@ -341,3 +341,28 @@ TEST(BrickReconstruction, TheBuildReportsItsMemoryEstimatedAndMeasured) {
   EXPECT_GE(m.at("peak_after").at("clusters").get<double>(), m.at("peak_after").at("reconstruct").get<double>());
   EXPECT_GE(j.at("bricks").at("bricks").get<int>(), 8);
 }
+
+// The bunny in eight bricks under a budget that the weld and the hierarchy
+// can hold too: no stage goes past it (10 % for what RSS sampling misses),
+// and each stage's estimate is not far under what it took.
+TEST(BrickReconstruction, ABunnyInEightBricksKeepsItsBudgetAtEveryStage) {
+  using scan2lod::testing::run_cli;
+  const fs::path dir = fresh_dir("budget");
+  fs::create_directories(dir);
+  const double budget = 160.0;
+  const scan2lod::testing::CliRun r =
+      run_cli("build " + std::string(SCAN2LOD_SOURCE_DIR) + "/data/bunny/bun.conf --structure clusters -r 256 " +
+                  "--memory 160M --json --work-dir " + (dir / "work").string() + " -o " + (dir / "m.mco").string(),
+              /*merge_stderr=*/false);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  ASSERT_GE(j.at("bricks").at("bricks").get<int>(), 8);
+  const nlohmann::json& m = j.at("memory_mib");
+  const double reconstruct = m.at("peak_after").at("reconstruct").get<double>();
+  const double clusters = m.at("peak_after").at("clusters").get<double>();
+  EXPECT_LE(reconstruct, 1.1 * budget);
+  EXPECT_LE(clusters, 1.1 * budget);
+  EXPECT_GE(m.at("estimated").at("weld").get<double>(), 0.9 * reconstruct);
+  EXPECT_GE(m.at("estimated").at("clusters").get<double>(), 0.9 * clusters);
+  EXPECT_LE(m.at("estimated").at("clusters").get<double>(), budget);
+}
