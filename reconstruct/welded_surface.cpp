@@ -135,10 +135,10 @@ void WeldedSurface::weld() {
   // no decision below depends on it, and finish() orders the mesh.
   leaf_mask_.resize(leaf_cube_.size());
   leaf_alive_.assign(leaf_cube_.size(), 1);
-  leaf_index_ = FlatHashMap(leaf_cube_.size());
+  leaf_index_ = IndexHash(&leaf_cube_, leaf_cube_.size());
   live_triangles_ = 0;
   for (std::size_t l = 0; l < leaf_cube_.size(); ++l) {
-    leaf_index_.insert(leaf_cube_[l], std::int32_t(l));
+    leaf_index_.insert(std::int32_t(l));
     leaf_mask_[l] = full_mask(std::int32_t(l));
     live_triangles_ += std::size_t(cube_cases()[leaf_case_[l]].triangle_count);
   }
@@ -375,7 +375,7 @@ std::size_t WeldedSurface::grow_into_small_holes(std::size_t max_edges, const Co
     }
     leaf_mask_.push_back(full_mask(leaf));
     leaf_alive_.push_back(1);
-    leaf_index_.insert(cube, leaf);
+    leaf_index_.insert(leaf);
     live_triangles_ += cc.triangle_count;
     fresh.push_back(leaf);
   }
@@ -431,7 +431,7 @@ void WeldedSurface::finish(TriangleMesh* mesh, std::vector<std::array<std::int32
   for (const OpenEdge& e : open_) boundary->push_back({e.a, e.b});
   std::sort(boundary->begin(), boundary->end());
   release(&open_), release(&vertex_edge_), release(&grown_list_), release(&corner_values_), release(&hole_parent_);
-  leaf_index_ = FlatHashMap(), grown_ = FlatHashMap(), corner_index_ = FlatHashMap(), grown_vertex_ = FlatHashMap();
+  leaf_index_ = IndexHash(&leaf_cube_), grown_ = FlatHashMap(), corner_index_ = FlatHashMap(), grown_vertex_ = FlatHashMap();
   std::vector<std::pair<std::uint64_t, std::int32_t>> order(leaf_cube_.size());
   for (std::size_t l = 0; l < leaf_cube_.size(); ++l) order[l] = {morton(leaf_cube_[l]), std::int32_t(l)};
   release(&leaf_cube_);

@@ -6,11 +6,11 @@
 // rim triangles over what marching cubes could not close.
 //
 // The surface is held as its leaves (emitting cube, case, kept case
-// triangles) with their triangles, over vertices keyed by lattice edge: about
-// 90 bytes a leaf.
+// triangles) with their triangles, over vertices keyed by lattice edge.
 #pragma once
 
 #include <scan2lod/core/flat_hash.h>
+#include <scan2lod/core/index_hash.h>
 #include <scan2lod/core/types.h>
 #include <scan2lod/reconstruct/cube_grid.h>
 
@@ -30,6 +30,8 @@ class WeldedSurface {
   // `threads`: for the sorts and scans of the whole surface (0: every core);
   // the surface is the same on any count.
   explicit WeldedSurface(const CubeGrid& grid, int threads = 0);
+  WeldedSurface(const WeldedSurface&) = delete;  // leaf_index_ points into it
+  WeldedSurface& operator=(const WeldedSurface&) = delete;
 
   // Room for the bricks' shares, counted before they are added: growth by
   // doubling held up to twice the surface.
@@ -100,7 +102,7 @@ class WeldedSurface {
   std::vector<Triangle> triangles_;
   std::size_t leaf_vertex_base_ = 0;       // add_leaves(): where the last brick's vertices begin
   std::vector<std::uint8_t> leaf_alive_;
-  FlatHashMap leaf_index_{64};             // cube -> leaf
+  IndexHash leaf_index_{&leaf_cube_};      // cube -> leaf
   std::size_t live_triangles_ = 0;
   // Hole closing: cubes grown (emitting or not), their holes, corner values.
   FlatHashMap grown_{64};                  // cube -> its hole id
