@@ -13,7 +13,6 @@ namespace scan2lod {
 namespace {
 
 constexpr int kMaxDim = 9;                   // position, normal, colour
-constexpr int kUpper = kMaxDim * (kMaxDim + 1) / 2;
 // A pivot below this share of the largest diagonal entry is a direction the
 // quadric does not constrain.
 constexpr double kSingular = 1e-9;
@@ -25,49 +24,81 @@ constexpr double kBoundaryWeight = 4.0;
 // dimension: A's upper triangle row by row, then b, then c. Sums of squared
 // distances to planes in R^dim. (Packed, a 6-dimensional quadric is 28
 // doubles, not the 55 of the largest: adding them was a tenth of the
-// instructions of a whole-mesh build.)
+// instructions of a whole-mesh build.) The functions work on a quadric's
+// doubles where they are: a group's quadrics are one flat array.
 struct Quadric {
-  std::array<double, kUpper + kMaxDim + 1> v{};
+  static constexpr int size(int dim) { return upper(dim) + dim + 1; }
+  static constexpr int upper(int dim) { return dim * (dim + 1) / 2; }
+  static constexpr int row(int i, int dim) { return i * dim - i * (i - 1) / 2; }  // where A's row i starts
 
-  static int upper(int dim) { return dim * (dim + 1) / 2; }
-  static int row(int i, int dim) { return i * dim - i * (i - 1) / 2; }  // where A's row i starts
-  void add(const Quadric& o, int dim) {
-    const int n = upper(dim) + dim + 1;
-    for (int i = 0; i < n; ++i) v[std::size_t(i)] += o.v[std::size_t(i)];
+  // Each operation dispatches to a version of fixed dimension (3, 6 or 9):
+  // loops of a known length unroll, and were a tenth of the build's
+  // instructions in the quadrics' set-up alone. Same operations, same order.
+  static void add(double* v, const double* o, int dim) {
+    switch (dim) {
+      case 3: return add_fixed<3>(v, o);
+      case 6: return add_fixed<6>(v, o);
+      default: return add_fixed<9>(v, o);
+    }
   }
-  double evaluate(const double* x, int dim) const {
-    const int n = upper(dim);
-    double e = v[std::size_t(n + dim)];
+  static double evaluate(const double* v, const double* x, int dim) {
+    switch (dim) {
+      case 3: return evaluate_fixed<3>(v, x);
+      case 6: return evaluate_fixed<6>(v, x);
+      default: return evaluate_fixed<9>(v, x);
+    }
+  }
+  // Adds w * (I - e0 e0^T - e1 e1^T) for the orthonormal basis {e0, e1} of
+  // a plane through q, over the first `plane_dim` (3 or all) of the
+  // quadric's `dim` coordinates.
+  static void add_plane(double* v, const double* q, const double (*basis)[kMaxDim], int plane_dim, int dim, double w) {
+    switch (dim * 16 + plane_dim) {
+      case 3 * 16 + 3: return add_plane_fixed<3, 3>(v, q, basis, w);
+      case 6 * 16 + 3: return add_plane_fixed<3, 6>(v, q, basis, w);
+      case 6 * 16 + 6: return add_plane_fixed<6, 6>(v, q, basis, w);
+      case 9 * 16 + 3: return add_plane_fixed<3, 9>(v, q, basis, w);
+      default: return add_plane_fixed<9, 9>(v, q, basis, w);
+    }
+  }
+
+ private:
+  template <int D>
+  static void add_fixed(double* v, const double* o) {
+    for (int i = 0; i < size(D); ++i) v[i] += o[i];
+  }
+  template <int D>
+  static double evaluate_fixed(const double* v, const double* x) {
+    constexpr int n = upper(D);
+    double e = v[std::size_t(n + D)];
     int k = 0;
-    for (int i = 0; i < dim; ++i) {
+    for (int i = 0; i < D; ++i) {
       double r = v[std::size_t(k++)] * x[i];
-      for (int j = i + 1; j < dim; ++j) r += 2 * v[std::size_t(k++)] * x[j];
+      for (int j = i + 1; j < D; ++j) r += 2 * v[std::size_t(k++)] * x[j];
       e += x[i] * r + 2 * v[std::size_t(n + i)] * x[i];
     }
     return e;
   }
-  // Adds w * (I - sum e e^T) for the orthonormal `basis` of a plane through
-  // q, over the first `plane_dim` of the quadric's `dim` coordinates.
-  void add_plane(const double* q, const double (*basis)[kMaxDim], int basis_size, int plane_dim, int dim, double w) {
-    const int n = upper(dim);
+  template <int PD, int D>
+  static void add_plane_fixed(double* v, const double* q, const double (*basis)[kMaxDim], double w) {
+    constexpr int n = upper(D);
     double qe[2] = {0, 0};
-    for (int s = 0; s < basis_size; ++s)
-      for (int i = 0; i < plane_dim; ++i) qe[s] += q[i] * basis[s][i];
-    for (int i = 0; i < plane_dim; ++i) {
-      int k = row(i, dim);
-      for (int j = i; j < plane_dim; ++j) {
+    for (int s = 0; s < 2; ++s)
+      for (int i = 0; i < PD; ++i) qe[s] += q[i] * basis[s][i];
+    for (int i = 0; i < PD; ++i) {
+      int k = row(i, D);
+      for (int j = i; j < PD; ++j) {
         double a = i == j ? 1.0 : 0.0;
-        for (int s = 0; s < basis_size; ++s) a -= basis[s][i] * basis[s][j];
+        for (int s = 0; s < 2; ++s) a -= basis[s][i] * basis[s][j];
         v[std::size_t(k++)] += w * a;
       }
       double bi = -q[i];
-      for (int s = 0; s < basis_size; ++s) bi += qe[s] * basis[s][i];
+      for (int s = 0; s < 2; ++s) bi += qe[s] * basis[s][i];
       v[std::size_t(n + i)] += w * bi;
     }
     double qq = 0;
-    for (int i = 0; i < plane_dim; ++i) qq += q[i] * q[i];
-    for (int s = 0; s < basis_size; ++s) qq -= qe[s] * qe[s];
-    v[std::size_t(n + dim)] += w * qq;
+    for (int i = 0; i < PD; ++i) qq += q[i] * q[i];
+    for (int s = 0; s < 2; ++s) qq -= qe[s] * qe[s];
+    v[std::size_t(n + D)] += w * qq;
   }
 };
 
@@ -77,13 +108,13 @@ struct Quadric {
 // of a fixed size: Eigen's with its condition estimate took half the
 // hierarchy's build, and a loop over the dimension a quarter.
 template <int D>
-bool sum_minimum(const Quadric& p, const Quadric& q, double* out, double* value) {
+bool sum_minimum(const double* p, const double* q, double* out, double* value) {
   double m[D][D], y[D];
   double largest = 0;
   constexpr int n = D * (D + 1) / 2;  // where b starts
   for (int i = 0; i < D; ++i) {
     const int row = Quadric::row(i, D);
-    for (int j = i; j < D; ++j) m[j][i] = p.v[std::size_t(row + j - i)] + q.v[std::size_t(row + j - i)];
+    for (int j = i; j < D; ++j) m[j][i] = p[std::size_t(row + j - i)] + q[std::size_t(row + j - i)];
     largest = std::max(largest, std::abs(m[i][i]));
   }
   if (!(largest > 0)) return false;
@@ -101,24 +132,24 @@ bool sum_minimum(const Quadric& p, const Quadric& q, double* out, double* value)
     }
   }
   for (int i = 0; i < D; ++i) {
-    double v = -(p.v[std::size_t(n + i)] + q.v[std::size_t(n + i)]);
+    double v = -(p[std::size_t(n + i)] + q[std::size_t(n + i)]);
     for (int k = 0; k < i; ++k) v -= m[i][k] * y[k];
     y[i] = v;
   }
   for (int i = 0; i < D; ++i) y[i] /= m[i][i];
-  double at = p.v[std::size_t(n + D)] + q.v[std::size_t(n + D)];  // x^T A x + 2 b^T x + c where A x = -b
+  double at = p[std::size_t(n + D)] + q[std::size_t(n + D)];  // x^T A x + 2 b^T x + c where A x = -b
   for (int i = D - 1; i >= 0; --i) {
     double v = y[i];
     for (int k = i + 1; k < D; ++k) v -= m[k][i] * out[k];
     if (!std::isfinite(v)) return false;
     out[i] = v;
   }
-  for (int i = 0; i < D; ++i) at += (p.v[std::size_t(n + i)] + q.v[std::size_t(n + i)]) * out[i];
+  for (int i = 0; i < D; ++i) at += (p[std::size_t(n + i)] + q[std::size_t(n + i)]) * out[i];
   *value = at;
   return true;
 }
 
-bool sum_minimum(int dim, const Quadric& p, const Quadric& q, double* out, double* value) {
+bool sum_minimum(int dim, const double* p, const double* q, double* out, double* value) {
   switch (dim) {
     case 3: return sum_minimum<3>(p, q, out, value);
     case 6: return sum_minimum<6>(p, q, out, value);
@@ -131,7 +162,10 @@ struct GroupQuadrics {
   int dim = 3;
   double scale = 1;                            // x's positions over the stored ones
   std::vector<std::array<double, kMaxDim>> x;  // each vertex's point in R^dim
-  std::vector<Quadric> full;                   // position + attributes
+  std::vector<double> full;  // each vertex's quadric (position + attributes), Quadric::size(dim) doubles
+
+  double* quadric(std::size_t v) { return full.data() + v * std::size_t(Quadric::size(dim)); }
+  const double* quadric(std::size_t v) const { return full.data() + v * std::size_t(Quadric::size(dim)); }
 };
 
 // Orthonormal basis of the plane through p0, p1, p2 in R^dim (Gram-Schmidt);
@@ -169,29 +203,37 @@ int other_count(const GroupTopology& g, int t, int a, int b) {
 // since group borders are locked anyway); used more than twice, or a vertex
 // whose border is not one simple chain, is complex and stays where it is.
 void classify(GroupTopology* g) {
-  std::vector<std::pair<std::uint64_t, int>> edges;
-  for (std::size_t t = 0; t < g->tris.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      std::uint32_t a = std::uint32_t(g->tris[t][std::size_t(k)]), b = std::uint32_t(g->tris[t][std::size_t((k + 1) % 3)]);
-      const bool forward = a < b;
-      if (!forward) std::swap(a, b);
-      edges.push_back({std::uint64_t(a) << 32 | b, forward ? 1 : -1});
+  // Each edge counted from its smaller end, over that end's triangles: a
+  // sort of all edges was 1.6 % of a whole build's instructions.
+  const std::size_t nv = g->border.size();  // incident is kept from larger groups
+  std::vector<int> border_edges(nv, 0);
+  thread_local std::vector<int> uses, orientation, around;
+  uses.assign(nv, 0), orientation.assign(nv, 0);
+  for (std::size_t v = 0; v < nv; ++v) {
+    around.clear();
+    for (int t : g->incident[v]) {
+      const auto& tri = g->tris[std::size_t(t)];
+      for (int k = 0; k < 3; ++k) {
+        if (tri[std::size_t(k)] != int(v)) continue;
+        const int next = tri[std::size_t((k + 1) % 3)], previous = tri[std::size_t((k + 2) % 3)];
+        for (const auto& [w, sign] : {std::pair<int, int>{next, 1}, std::pair<int, int>{previous, -1}}) {
+          if (w <= int(v)) continue;
+          if (uses[std::size_t(w)]++ == 0) around.push_back(w);
+          orientation[std::size_t(w)] += sign;
+        }
+      }
     }
-  std::sort(edges.begin(), edges.end());
-  std::vector<int> border_edges(g->incident.size(), 0);
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    int orientation = 0;
-    while (j < edges.size() && edges[j].first == edges[i].first) orientation += edges[j].second, ++j;
-    const int a = int(edges[i].first >> 32), b = int(edges[i].first & 0xffffffffu);
-    if (j - i == 1) {
-      ++border_edges[std::size_t(a)], ++border_edges[std::size_t(b)];
-    } else if (j - i > 2 || orientation != 0) {
-      g->locked[std::size_t(a)] = g->locked[std::size_t(b)] = 1;  // non-manifold or flipped neighbours
+    for (int w : around) {
+      const int n = uses[std::size_t(w)];
+      if (n == 1) {
+        ++border_edges[v], ++border_edges[std::size_t(w)];
+      } else if (n > 2 || orientation[std::size_t(w)] != 0) {
+        g->locked[v] = g->locked[std::size_t(w)] = 1;  // non-manifold or flipped neighbours
+      }
+      uses[std::size_t(w)] = 0, orientation[std::size_t(w)] = 0;
     }
-    i = j;
   }
-  for (std::size_t v = 0; v < g->incident.size(); ++v) {
+  for (std::size_t v = 0; v < nv; ++v) {
     if (border_edges[v] > 2) g->locked[v] = 1;  // two border chains meet here
     g->border[v] = border_edges[v] > 0;
   }
@@ -344,7 +386,7 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
   q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
   q.scale = in.scale;
   q.x.resize(nv);
-  q.full.assign(nv, Quadric());
+  q.full.assign(nv * std::size_t(Quadric::size(q.dim)), 0.0);
   for (std::size_t v = 0; v < nv; ++v) {
     const std::size_t gv = std::size_t(global[v]);
     double* x = q.x[v].data();
@@ -362,9 +404,10 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
     const double area = 0.5 * normal.norm();
     if (!(area > 0)) continue;
     double basis[2][kMaxDim];
-    Quadric full;
-    if (triangle_basis(p[0], p[1], p[2], q.dim, basis)) full.add_plane(p[0], basis, 2, q.dim, q.dim, area);
-    for (int v : tri) q.full[std::size_t(v)].add(full, q.dim);
+    double full[Quadric::size(kMaxDim)];
+    std::fill_n(full, Quadric::size(q.dim), 0.0);
+    if (triangle_basis(p[0], p[1], p[2], q.dim, basis)) Quadric::add_plane(full, p[0], basis, q.dim, q.dim, area);
+    for (int v : tri) Quadric::add(q.quadric(std::size_t(v)), full, q.dim);
     // Border edges: a plane through the edge and the face normal, so that a
     // border slides along itself rather than inwards.
     for (int k = 0; k < 3; ++k) {
@@ -380,9 +423,10 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
       double cb[2][kMaxDim] = {};
       const Eigen::Vector3d e0 = edge.normalized(), e1 = normal.normalized();
       for (int i = 0; i < 3; ++i) cb[0][i] = e0[i], cb[1][i] = e1[i];
-      Quadric constraint;
-      constraint.add_plane(q.x[std::size_t(u)].data(), cb, 2, 3, q.dim, kBoundaryWeight * edge.squaredNorm());
-      for (int v : {u, w}) q.full[std::size_t(v)].add(constraint, q.dim);
+      double constraint[Quadric::size(kMaxDim)];
+      std::fill_n(constraint, Quadric::size(q.dim), 0.0);
+      Quadric::add_plane(constraint, q.x[std::size_t(u)].data(), cb, 3, q.dim, kBoundaryWeight * edge.squaredNorm());
+      for (int v : {u, w}) Quadric::add(q.quadric(std::size_t(v)), constraint, q.dim);
     }
   }
 
@@ -407,14 +451,15 @@ Meeting meeting(const GroupTopology& g, const GroupQuadrics& q, int from, int to
   const bool to_fixed = g.locked[t] || (g.border[t] && !g.border[f]);
   if (to_fixed || !optimal) {
     m.x = q.x[t];
-    m.cost = float(std::max(0.0, q.full[f].evaluate(m.x.data(), q.dim) + q.full[t].evaluate(m.x.data(), q.dim)));
+    m.cost = float(std::max(0.0, Quadric::evaluate(q.quadric(f), m.x.data(), q.dim) +
+                                     Quadric::evaluate(q.quadric(t), m.x.data(), q.dim)));
     return m;
   }
   const double* a = q.x[f].data();
   const double* b = q.x[t].data();
   double length2 = 0, off2 = 0, at = 0;
   for (int i = 0; i < 3; ++i) length2 += (a[i] - b[i]) * (a[i] - b[i]);
-  if (sum_minimum(q.dim, q.full[f], q.full[t], m.x.data(), &at)) {
+  if (sum_minimum(q.dim, q.quadric(f), q.quadric(t), m.x.data(), &at)) {
     for (int i = 0; i < 3; ++i) off2 += (m.x[std::size_t(i)] - 0.5 * (a[i] + b[i])) * (m.x[std::size_t(i)] - 0.5 * (a[i] + b[i]));
     if (off2 <= length2) {
       m.cost = float(std::max(0.0, at));
@@ -424,7 +469,9 @@ Meeting meeting(const GroupTopology& g, const GroupQuadrics& q, int from, int to
   m.x = {};
   std::array<double, kMaxDim> middle{};
   for (int i = 0; i < q.dim; ++i) middle[std::size_t(i)] = 0.5 * (a[i] + b[i]);
-  auto cost_at = [&](const double* x) { return q.full[f].evaluate(x, q.dim) + q.full[t].evaluate(x, q.dim); };
+  auto cost_at = [&](const double* x) {
+    return Quadric::evaluate(q.quadric(f), x, q.dim) + Quadric::evaluate(q.quadric(t), x, q.dim);
+  };
   const double at_to = cost_at(b), at_from = cost_at(a), at_middle = cost_at(middle.data());
   m.x = q.x[t];
   double best = at_to;
@@ -521,7 +568,7 @@ std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopol
     moved_to[std::size_t(c.from)] = c.to;
     if (!std::equal(m.x.begin(), m.x.begin() + q.dim, q.x[std::size_t(c.to)].begin()))
       q.x[std::size_t(c.to)] = m.x, (*moved)[std::size_t(c.to)] = 1;
-    q.full[std::size_t(c.to)].add(q.full[std::size_t(c.from)], q.dim);
+    Quadric::add(q.quadric(std::size_t(c.to)), q.quadric(std::size_t(c.from)), q.dim);
     ++version[std::size_t(c.to)];
     auto& list = g.incident[std::size_t(c.to)];
     list.erase(std::remove_if(list.begin(), list.end(), [&](int t) { return g.dead[std::size_t(t)] != 0; }),
@@ -537,7 +584,7 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
   const bool use_normals = in.normal_weight > 0 && !in.normals.empty();
   const bool use_colors = in.color_weight > 0 && !in.colors.empty();
   thread_local GroupTopology g;
-  thread_local GroupQuadrics q;  // reused: a group's quadrics are about a megabyte
+  thread_local GroupQuadrics q;  // reused: a group's quadrics are about half a megabyte
   thread_local std::vector<std::array<double, kMaxDim>> origin;
   thread_local std::vector<std::uint8_t> moved;
   const std::vector<std::int32_t> global = load_group(triangles, in, &g);
