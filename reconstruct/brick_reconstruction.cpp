@@ -215,18 +215,17 @@ PointSurvey survey(const PointSource& points, const CubeGrid& grid, int smallest
 }
 
 // The weld holds the whole surface: leaves, triangles, vertices and their
-// keys, then the mesh. The process's peak in the weld (its peak RSS where the
-// bricks peaked lower): 258 MiB for 1.70 M estimated cubes (the pair's 16
-// scans, 1.03 M points, R = 1024), 837 MiB for 6.95 M (9.8 M points, R =
-// 2048), 3490 MiB for 28.0 M (99 M points, R = 4096): about 73 MiB and 110-122
-// bytes a cube. The leaves' hash table holds a power of two of 12-byte slots,
-// 2 to 4 a leaf, so a count just past a power of two costs some 23 bytes a
-// cube more: 135 here. (160 bytes a cube, from the first size alone, put the
-// 10^8-point weld over the 4 GiB budget that it kept.) On disk a cube's share
-// takes about 54 bytes (bench/scale: 184 MiB for 3.6 M cubes in 42 bricks, 744
-// MiB for 14.6 M in 194); 60 leaves room.
+// keys, then the mesh. The process's peak in the weld (its peak RSS with the
+// bricks resumed, or where the bricks peaked lower): 215 MiB for 1.70 M
+// estimated cubes (the pair's 16 scans, 1.03 M points, R = 1024), 659 MiB for
+// 6.95 M (9.9 M points, R = 2048), at most 2599 MiB for 28.0 M (99 M points,
+// R = 4096): 76 MiB and 86-95 bytes a cube. The leaves' hash table holds a
+// power of two of 4-byte slots, 2 to 4 a leaf, so a count just past a power
+// of two costs some 8 bytes a cube more: 105 here. On disk a cube's share
+// takes about 54 bytes (bench/scale: 184 MiB for 3.6 M cubes in 42 bricks,
+// 744 MiB for 14.6 M in 194); 60 leaves room.
 constexpr double kWeldBaseBytes = 76.0 * (1 << 20);
-constexpr double kWeldBytesPerCube = 135.0;
+constexpr double kWeldBytesPerCube = 105.0;
 constexpr double kDiskBytesPerCube = 60.0;
 
 
