@@ -10,6 +10,17 @@
 
 namespace scan2lod {
 
+// splitmix64's finalizer: packed coordinates are far from uniform, and the
+// tables take their low bits.
+inline std::uint64_t mix_key(std::uint64_t key) {
+  key ^= key >> 30;
+  key *= 0xbf58476d1ce4e5b9ull;
+  key ^= key >> 27;
+  key *= 0x94d049bb133111ebull;
+  key ^= key >> 31;
+  return key;
+}
+
 class FlatHashMap {
  public:
   static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
@@ -83,15 +94,7 @@ class FlatHashMap {
     while (c < n * 2) c *= 2;
     return c;
   }
-  std::size_t slot(std::uint64_t key) const {
-    // splitmix64 finalizer: packed coordinates are far from uniform.
-    key ^= key >> 30;
-    key *= 0xbf58476d1ce4e5b9ull;
-    key ^= key >> 27;
-    key *= 0x94d049bb133111ebull;
-    key ^= key >> 31;
-    return std::size_t(key) & mask_;
-  }
+  std::size_t slot(std::uint64_t key) const { return std::size_t(mix_key(key)) & mask_; }
   void rehash(std::size_t capacity) {
     std::vector<std::uint64_t> old_keys(capacity, kEmpty);
     std::vector<std::int32_t> old_values(capacity);

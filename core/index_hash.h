@@ -4,6 +4,8 @@
 // 10^8 points (28 M leaves in 2^26 slots), a quarter of its peak; 256 MiB so.
 #pragma once
 
+#include <scan2lod/core/flat_hash.h>
+
 #include <cassert>
 #include <cstdint>
 #include <vector>
@@ -41,15 +43,7 @@ class IndexHash {
  private:
   static constexpr std::int32_t kEmpty = -1;
 
-  std::size_t slot(std::uint64_t key) const {
-    // splitmix64 finalizer, as FlatHashMap: packed coordinates are far from uniform.
-    key ^= key >> 30;
-    key *= 0xbf58476d1ce4e5b9ull;
-    key ^= key >> 27;
-    key *= 0x94d049bb133111ebull;
-    key ^= key >> 31;
-    return std::size_t(key) & (slots_.size() - 1);
-  }
+  std::size_t slot(std::uint64_t key) const { return std::size_t(mix_key(key)) & (slots_.size() - 1); }
   void place(std::int32_t i) {
     std::size_t s = slot((*keys_)[std::size_t(i)]);
     while (slots_[s] != kEmpty) s = (s + 1) & (slots_.size() - 1);
