@@ -28,6 +28,7 @@ class FlatHashMap {
   explicit FlatHashMap(std::size_t expected = 16) { rehash(capacity_for(expected)); }
 
   std::size_t size() const { return size_; }
+  std::size_t capacity() const { return keys_.size(); }  // slots
 
   // Returns the value for key, or -1.
   std::int32_t find(std::uint64_t key) const {
