@@ -31,9 +31,9 @@ struct Quadric {
   static constexpr int upper(int dim) { return dim * (dim + 1) / 2; }
   static constexpr int row(int i, int dim) { return i * dim - i * (i - 1) / 2; }  // where A's row i starts
 
-  // Each operation dispatches to a version of fixed dimension (3, 6 or 9):
-  // loops of a known length unroll, and were a tenth of the build's
-  // instructions in the quadrics' set-up alone. Same operations, same order.
+  // Each operation dispatches to a version of fixed dimension (3, 6 or 9),
+  // whose loops of a known length unroll: the quadrics' set-up fell from 9 %
+  // to 8 % of a build's instructions. Same operations, same order.
   static void add(double* v, const double* o, int dim) {
     switch (dim) {
       case 3: return add_fixed<3>(v, o);
