@@ -13,7 +13,7 @@
 #include <scan2lod/lod/clusters/paged_model.h>
 #include <scan2lod/lod/clusters/triangle_spool.h>
 
-#include <meshoptimizer.h>
+#include <scan2lod/lod/clusters/meshlet_builder.h>
 
 #include <algorithm>
 #include <atomic>
@@ -103,10 +103,9 @@ Sphere enclosing_sphere(const std::vector<Sphere>& spheres) {
 struct MeshletScratch {
   GroupVertices used;  // the group's vertices, placed ones too, in order of first use
   std::vector<Vec3f> local_positions;
-  std::vector<unsigned> indices;
-  std::vector<meshopt_Meshlet> meshlets;
-  std::vector<unsigned> meshlet_vertices;
-  std::vector<unsigned char> meshlet_triangles;
+  std::vector<std::uint32_t> indices;
+  MeshletBuilder builder;
+  std::vector<Triangle> reordered;
 };
 
 // Simplified triangles cut into clusters.
@@ -116,9 +115,9 @@ struct SplitGroup {
   int parts = 0;
 };
 
-// Triangles cut into clusters of at most `cluster_triangles` by
-// meshoptimizer's meshlet builder (a greedy walk over adjacent triangles that
-// keeps meshlets compact), reordered cluster by cluster: part[t] is t's
+// Triangles cut into clusters of at most `cluster_triangles` by the meshlet
+// builder (a greedy walk over adjacent triangles that keeps meshlets
+// compact: lod/clusters/meshlet_builder.h), reordered cluster by cluster: part[t] is t's
 // cluster. Each triangle keeps its corners and their order, so the full
 // mesh's clusters are the input mesh.
 //
@@ -140,27 +139,19 @@ std::vector<std::int32_t> meshlet_parts(const JoinedView<Vec3f>& positions, cons
     const std::int32_t v = used[i];
     s.local_positions[i] = v >= 0 ? positions[std::size_t(v)] : placed[std::size_t(-1 - v)];
   }
-  const std::size_t max_triangles = std::size_t(std::clamp(cluster_triangles / 4 * 4, 4, 512));
-  const std::size_t max_vertices = 255;
-  const std::size_t bound = meshopt_buildMeshletsBound(s.indices.size(), max_vertices, max_triangles);
-  s.meshlets.resize(bound);
-  s.meshlet_vertices.resize(bound * max_vertices);
-  s.meshlet_triangles.resize(bound * max_triangles * 3);
-  const std::size_t count = meshopt_buildMeshlets(
-      s.meshlets.data(), s.meshlet_vertices.data(), s.meshlet_triangles.data(), s.indices.data(), s.indices.size(),
-      &s.local_positions[0].x(), s.local_positions.size(), sizeof(Vec3f), max_vertices, max_triangles, 0.f);
-  std::vector<std::int32_t> part;
-  part.reserve(triangles->size());
-  std::size_t at = 0;
-  for (std::size_t m = 0; m < count; ++m) {
-    const meshopt_Meshlet& ml = s.meshlets[m];
-    for (unsigned t = 0; t < ml.triangle_count; ++t) {
-      const unsigned char* corner = &s.meshlet_triangles[ml.triangle_offset + 3 * t];
-      Triangle& out = (*triangles)[at++];
-      for (int k = 0; k < 3; ++k) out[std::size_t(k)] = used[s.meshlet_vertices[ml.vertex_offset + corner[k]]];
-      part.push_back(std::int32_t(m));
+  const std::size_t count =
+      s.builder.build(s.indices.data(), triangles->size(), s.local_positions.data(), s.local_positions.size(), 255,
+                      std::uint32_t(std::clamp(cluster_triangles, 1, 512)));
+  const std::vector<std::uint32_t>& order = s.builder.order();
+  const std::vector<std::uint32_t>& ends = s.builder.ends();
+  std::vector<std::int32_t> part(triangles->size());
+  s.reordered.resize(triangles->size());
+  for (std::size_t m = 0, at = 0; m < count; ++m)
+    for (; at < ends[m]; ++at) {
+      s.reordered[at] = (*triangles)[order[at]];
+      part[at] = std::int32_t(m);
     }
-  }
+  std::copy(s.reordered.begin(), s.reordered.end(), triangles->begin());
   *parts = int(count);
   return part;
 }
