@@ -83,9 +83,12 @@ struct Quadric {
     constexpr int n = upper(D);
     double qe[2] = {0, 0};
     for (int s = 0; s < 2; ++s)
+#pragma GCC unroll 9
       for (int i = 0; i < PD; ++i) qe[s] += q[i] * basis[s][i];
+#pragma GCC unroll 9
     for (int i = 0; i < PD; ++i) {
       int k = row(i, D);
+#pragma GCC unroll 9
       for (int j = i; j < PD; ++j) {
         double a = i == j ? 1.0 : 0.0;
         for (int s = 0; s < 2; ++s) a -= basis[s][i] * basis[s][j];
@@ -109,42 +112,57 @@ struct Quadric {
 // hierarchy's build, and a loop over the dimension a quarter.
 template <int D>
 bool sum_minimum(const double* p, const double* q, double* out, double* value) {
+  constexpr int n = D * (D + 1) / 2;  // where b starts
+  double s[n + D + 1];                // p + q, packed as they are
+  for (int i = 0; i < n + D + 1; ++i) s[i] = p[i] + q[i];
   double m[D][D], y[D];
   double largest = 0;
-  constexpr int n = D * (D + 1) / 2;  // where b starts
+  // Unrolled whole: as loops, the indexing was half the solve's instructions.
+#pragma GCC unroll 9
   for (int i = 0; i < D; ++i) {
     const int row = Quadric::row(i, D);
-    for (int j = i; j < D; ++j) m[j][i] = p[std::size_t(row + j - i)] + q[std::size_t(row + j - i)];
+#pragma GCC unroll 9
+    for (int j = i; j < D; ++j) m[j][i] = s[row + j - i];
     largest = std::max(largest, std::abs(m[i][i]));
   }
   if (!(largest > 0)) return false;
+#pragma GCC unroll 9
   for (int j = 0; j < D; ++j) {  // lower triangle: L below, D on the diagonal
     double ld[D];                 // row j of L times D, taken once for the column
     double d = m[j][j];
+#pragma GCC unroll 9
     for (int k = 0; k < j; ++k) ld[k] = m[j][k] * m[k][k], d -= m[j][k] * ld[k];
     if (!(d > kSingular * largest)) return false;
     m[j][j] = d;
     const double inverse = 1 / d;
+#pragma GCC unroll 9
     for (int i = j + 1; i < D; ++i) {
       double v = m[i][j];
+#pragma GCC unroll 9
       for (int k = 0; k < j; ++k) v -= m[i][k] * ld[k];
       m[i][j] = v * inverse;
     }
   }
+#pragma GCC unroll 9
   for (int i = 0; i < D; ++i) {
-    double v = -(p[std::size_t(n + i)] + q[std::size_t(n + i)]);
+    double v = -s[n + i];
+#pragma GCC unroll 9
     for (int k = 0; k < i; ++k) v -= m[i][k] * y[k];
     y[i] = v;
   }
+#pragma GCC unroll 9
   for (int i = 0; i < D; ++i) y[i] /= m[i][i];
-  double at = p[std::size_t(n + D)] + q[std::size_t(n + D)];  // x^T A x + 2 b^T x + c where A x = -b
+  double at = s[n + D];  // x^T A x + 2 b^T x + c where A x = -b
+#pragma GCC unroll 9
   for (int i = D - 1; i >= 0; --i) {
     double v = y[i];
+#pragma GCC unroll 9
     for (int k = i + 1; k < D; ++k) v -= m[k][i] * out[k];
     if (!std::isfinite(v)) return false;
     out[i] = v;
   }
-  for (int i = 0; i < D; ++i) at += (p[std::size_t(n + i)] + q[std::size_t(n + i)]) * out[i];
+#pragma GCC unroll 9
+  for (int i = 0; i < D; ++i) at += s[n + i] * out[i];
   *value = at;
   return true;
 }
