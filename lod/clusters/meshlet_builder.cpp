@@ -10,7 +10,6 @@ namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr std::uint32_t kLeafTriangles = 16;
-constexpr std::uint32_t kRanks = 4;
 
 float distance2(const Vec3f& a, const Vec3f& b) { return (a - b).squaredNorm(); }
 
@@ -149,12 +148,14 @@ std::size_t MeshletBuilder::build(const std::uint32_t* indices, std::size_t tria
 
   for (std::uint32_t emitted = 0; emitted < triangles; ++emitted) {
     const Vec3f center = meshlet_triangles ? Vec3f(sum / float(meshlet_triangles)) : Vec3f::Zero();
-    std::uint32_t extra = 0;
-    std::uint32_t t = pick([&](std::uint32_t u) { return distance2(centroids_[u], center); }, &extra);
+    std::uint32_t best_rank = 0;
+    std::uint32_t t = pick([&](std::uint32_t u) { return distance2(centroids_[u], center); }, &best_rank);
     // A full meshlet: nearness to its centre means nothing for the next one,
     // which starts from the neighbour whose vertices have the fewest
-    // triangles left.
-    if (t != kNone && (meshlet_vertices + extra > max_vertices || meshlet_triangles >= max_triangles))
+    // triangles left. (The rank stands for the vertices the triangle adds,
+    // one over, as in meshoptimizer: a meshlet hands on a little before its
+    // vertex limit.)
+    if (t != kNone && (meshlet_vertices + best_rank > max_vertices || meshlet_triangles >= max_triangles))
       t = pick(
           [&](std::uint32_t u) {
             const std::uint32_t* c = indices + 3 * std::size_t(u);

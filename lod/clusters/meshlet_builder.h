@@ -55,7 +55,8 @@ class MeshletBuilder {
   std::vector<std::uint8_t> inside_;                          // a frontier triangle's corners in the meshlet
   std::vector<std::uint8_t> dangling_, emitted_;
   std::vector<Vec3f> centroids_;
-  std::vector<std::uint32_t> frontier_[4];  // the meshlet's neighbours by rank
+  static constexpr std::uint32_t kRanks = 4;
+  std::vector<std::uint32_t> frontier_[kRanks];  // the meshlet's neighbours by rank
   std::vector<KdNode> kd_;
   std::vector<std::uint32_t> kd_items_, kd_leaf_;
   std::vector<std::uint32_t> order_, ends_;
