@@ -106,6 +106,9 @@
 //         where its geometry lies in PGEO, its checksum and box
 //   PGEO  bytes: each page's triangles over a vertex table of its own
 //         (lod/clusters/page_geometry.h), so that a viewer reads a page in one read
+// Added in 4.7, optional (a 4.6 reader ranks cuts by count with the errors):
+//   CGRK  f32 per group: the rank cuts by triangle count go by
+//         (ClusterHierarchy::group_ranks)
 // Every section is listed once, with the formats that hold it: the shared
 // vertices' in model_file.cpp, each structure's in its part
 // (lod/model_sections.h: lod/octree/octree_sections.cpp,
@@ -127,7 +130,7 @@
 namespace scan2lod {
 
 constexpr std::uint32_t kModelFormatMajor = 4;
-constexpr std::uint32_t kModelFormatMinor = 6;
+constexpr std::uint32_t kModelFormatMinor = 7;
 
 // Writes `model` to `path` (extension .mco) through write_atomically: a
 // failure or a signal leaves nothing under `path`.

@@ -15,6 +15,7 @@
 #include <scan2lod/measure/topology.h>
 #include <scan2lod/pipeline/build_model.h>
 #include <scan2lod/reconstruct/marching_cubes.h>
+#include "test_cluster_cuts.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -83,11 +84,11 @@ TEST(ClusterBlocks, EveryCutIsAsSoundAsTheFullMesh) {
   const TriangleMesh& mesh = bunny256();
   const MeshTopology full = mesh_topology(mesh);
   LevelExtractor extractor(in_blocks(), LodStructure::kClusters);
-  const ClusterCutTable table = cluster_cut_table(*in_blocks().clusters);
+  const std::vector<LevelRequest> cuts = testing::every_uniform_cut(*in_blocks().clusters);
   int checked = 0;
-  for (std::size_t i = 0; i < table.errors.size(); i += std::max<std::size_t>(1, table.errors.size() / 40)) {
-    if (table.triangles[i] < 1000) continue;
-    const LevelCut& cut = extractor.extract(LevelRequest::at_error(table.errors[i]));
+  for (std::size_t i = 0; i < cuts.size(); i += std::max<std::size_t>(1, cuts.size() / 80)) {
+    const LevelCut& cut = extractor.extract(cuts[i]);
+    if (cut.triangles.size() < 1000) continue;
     const MeshTopology t = mesh_topology(compact_level(in_blocks(), cut.triangles));
     EXPECT_EQ(t.non_manifold_edges, 0u) << cut.triangles.size() << " triangles";
     EXPECT_LE(t.boundary_loops, full.boundary_loops) << cut.triangles.size() << " triangles";
@@ -187,9 +188,11 @@ TEST(ClusterBlocks, PagesHoldEveryClusterACutDrawsAndSurviveTheFile) {
     }
     EXPECT_EQ(next, h.clusters.size());
     // Every cluster a uniform cut draws lies in a page whose interval holds the threshold.
-    const ClusterCutTable table = cluster_cut_table(h);
-    for (std::size_t k = 0; k < table.errors.size(); k += std::max<std::size_t>(1, table.errors.size() / 25)) {
-      const float t = table.errors[k];
+    std::vector<float> errors;
+    for (const GroupBound& g : h.groups) errors.push_back(g.error);
+    std::sort(errors.begin(), errors.end());
+    for (std::size_t k = 0; k < errors.size(); k += std::max<std::size_t>(1, errors.size() / 25)) {
+      const float t = errors[k];
       for (std::size_t c = 0; c < h.clusters.size(); ++c) {
         const Cluster& cl = h.clusters[c];
         const float own = cl.own_group < 0 ? 0.f : h.groups[std::size_t(cl.own_group)].error;

@@ -7,6 +7,7 @@
 #include <scan2lod/measure/surface_distance.h>
 #include <scan2lod/measure/topology.h>
 #include <scan2lod/reconstruct/marching_cubes.h>
+#include "test_cluster_cuts.h"
 
 #include <gtest/gtest.h>
 
@@ -64,10 +65,9 @@ TEST(ClusterCoarseEnd, HighGenusGoesDownToAFewHundredTrianglesWithSoundCutsAbove
   LevelExtractor extractor(model, LodStructure::kClusters);
   EXPECT_LE(extractor.coarsest_triangles(), std::int64_t(kCoarsestTriangles));
 
-  const ClusterCutTable table = cluster_cut_table(*model.clusters);
   std::size_t sound = 0, coarse = 0;
-  for (std::size_t i = 0; i < table.errors.size(); ++i) {
-    const LevelCut& cut = extractor.extract(LevelRequest::at_error(table.errors[i]));
+  for (const LevelRequest& request : testing::every_uniform_cut(*model.clusters)) {
+    const LevelCut& cut = extractor.extract(request);
     TriangleMesh level;
     level.positions.assign(model.vertices.positions.begin(), model.vertices.positions.end());
     level.triangles = cut.triangles;
@@ -84,6 +84,11 @@ TEST(ClusterCoarseEnd, HighGenusGoesDownToAFewHundredTrianglesWithSoundCutsAbove
   }
   EXPECT_GT(sound, 5u);
   EXPECT_GE(coarse, 1u);
+  // The last steps halve: a budget just under the sound cuts gets a cut
+  // near it, not the coarsest.
+  const std::size_t under = extractor.extract(LevelRequest::at_most_triangles(999)).triangles.size();
+  std::printf("a budget of 999 triangles: %zu\n", under);
+  EXPECT_GE(under, 2 * std::size_t(extractor.coarsest_triangles()));
 
   // The coarsest cut still stands for the shape: within a few percent of
   // the diagonal of the full mesh, both ways.

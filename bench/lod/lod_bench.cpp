@@ -665,6 +665,7 @@ struct Settings {
   std::uint64_t seed = 1;
   std::string only;  // run only the peers whose name contains this
   bool write = false;
+  std::vector<std::int64_t> cut_budgets = kClusterBudgets;
 };
 
 struct RunInfo {
@@ -1254,6 +1255,10 @@ int main(int argc, char** argv) {
   app.add_option("--seed", s.seed, "Seed of the Metro sampling");
   app.add_option("--only", s.only, "Run only the peers whose name contains this; the others are listed as skipped");
   app.add_flag("--write", s.write, "Also write the report to bench/lod/REPORT.md in the source tree");
+  app.add_option("--cut-budgets", s.cut_budgets,
+                 "Triangle budgets of the cluster hierarchy's uniform cuts (default 1000 ... 200000)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   if (s.input.empty()) {
     std::fprintf(stderr, "no input: neither %s/data/bunny/bun.conf nor ../shared/data/bunny exists; pass --input\n",
@@ -1384,7 +1389,7 @@ int main(int argc, char** argv) {
     cluster_full_mesh = compact_level(model, cluster_full);
     LevelExtractor octree(model, LodStructure::kOctree);
     std::vector<std::int64_t> budgets = {0};
-    for (const std::int64_t b : kClusterBudgets)
+    for (const std::int64_t b : s.cut_budgets)
       if (b < info.cluster_full) budgets.push_back(b);
     for (const std::int64_t b : budgets) {
       ClusterLevel l;

@@ -376,13 +376,13 @@ ClusterResult check_clusters(const LodModel& model, const MeshTopology& octree_f
   };
 
   ClusterResult c;
-  c.cuts = table.errors.size();
+  c.cuts = table.ranks.size();
   c.coarsest = table.triangles.back();
   c.storage = h.full_triangles ? double(h.triangles.size()) / double(h.full_triangles) : 0;
   c.levels = h.levels();
   c.clusters = h.size();
   c.groups = h.groups.size();
-  c.full = measure(extractor.extract(LevelRequest::at_error(table.errors.front())));
+  c.full = measure(extractor.extract(LevelRequest::at_error(0)));
   const MeshTopology& full = c.full;
   c.full_same_as_octree = full.triangles == octree_full.triangles && full.boundary_loops == octree_full.boundary_loops &&
                           full.components == octree_full.components &&
@@ -390,13 +390,13 @@ ClusterResult check_clusters(const LodModel& model, const MeshTopology& octree_f
   c.smallest_judged = h.full_triangles;
 
   const bool small = h.full_triangles < kSmallMesh;
-  for (std::size_t i = 0; i < table.errors.size(); ++i) {
-    const LevelCut& cut = extractor.extract(LevelRequest::at_error(table.errors[i]));
+  for (std::size_t i = 0; i < table.ranks.size(); ++i) {
+    const LevelCut& cut = extractor.extract(LevelRequest::at_most_triangles(table.triangles[i]));
     const MeshTopology t = measure(cut);
     const bool judged = small || table.triangles[i] >= kJudgedCutTriangles;
-    std::printf("cut %zu error=%.6g tris=%zu table=%lld clusters=%zu loops=%zu bedges=%zu nm=%zu degen=%zu comps=%zu "
+    std::printf("cut %zu rank=%.6g tris=%zu table=%lld clusters=%zu loops=%zu bedges=%zu nm=%zu degen=%zu comps=%zu "
                 "euler=%ld%s\n",
-                i, double(table.errors[i]), t.triangles, (long long)table.triangles[i], cut.clusters, t.boundary_loops,
+                i, double(table.ranks[i]), t.triangles, (long long)table.triangles[i], cut.clusters, t.boundary_loops,
                 t.boundary_edges, t.non_manifold_edges, t.degenerate_triangles, t.components, t.euler_characteristic,
                 judged ? "" : " (not judged)");
     const bool bad = t.boundary_loops > full.boundary_loops || t.non_manifold_edges > 0 ||
@@ -410,8 +410,8 @@ ClusterResult check_clusters(const LodModel& model, const MeshTopology& octree_f
     c.max_comps = std::max(c.max_comps, t.components);
     c.max_degen = std::max(c.max_degen, t.degenerate_triangles);
     // The table's short form is what comes before " (".
-    const std::string at = format("%lld-triangle cut (cut %zu, error %.3g): ", (long long)table.triangles[i], i,
-                                  double(table.errors[i]));
+    const std::string at = format("%lld-triangle cut (cut %zu, rank %.3g): ", (long long)table.triangles[i], i,
+                                  double(table.ranks[i]));
     if (table.triangles[i] < kJudgedCutTriangles) {  // pieces only (see the top of the file)
       c.unjudged_bad += t.boundary_loops > full.boundary_loops || t.non_manifold_edges > 0;
     } else {

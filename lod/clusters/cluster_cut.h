@@ -30,6 +30,15 @@ struct CameraView {
 // The clusters with own(c) <= error < parent(c), in cluster order.
 void select_clusters_by_error(const ClusterHierarchy& h, float error, std::vector<std::int32_t>* selected);
 
+// The same over the groups' ranks (ClusterHierarchy::group_ranks), which
+// cuts by triangle count go by: the rank never falls going up either, so
+// this cut is as watertight.
+void select_clusters_by_rank(const ClusterHierarchy& h, float rank, std::vector<std::int32_t>* selected);
+
+// The largest error of the groups that made the selected clusters: what the
+// cut may deviate by (0 at full detail).
+float cut_error(const ClusterHierarchy& h, const std::vector<std::int32_t>& selected);
+
 // The clusters whose error, seen from `camera`, is at most `pixel_error`
 // pixels while their parent's is more: a group's error projected at the near
 // side of its sphere (a camera inside it sees the error as infinite, so the
@@ -38,23 +47,23 @@ void select_clusters_by_error(const ClusterHierarchy& h, float error, std::vecto
 void select_clusters_for_view(const ClusterHierarchy& h, const CameraView& camera, float pixel_error,
                               std::vector<float>* projected, std::vector<std::int32_t>* selected);
 
-// Triangles of the uniform cut at each threshold where it changes: errors[0]
-// is 0 (full detail), then the groups' distinct errors rising; triangles[i] is
-// the cut's count at errors[i], never rising.
+// Triangles of the uniform cut at each rank where it changes: ranks[0] is 0
+// (full detail), then the groups' distinct ranks rising; triangles[i] is the
+// cut's count at ranks[i], never rising.
 struct ClusterCutTable {
-  std::vector<float> errors;
+  std::vector<float> ranks;
   std::vector<std::int64_t> triangles;
 };
 ClusterCutTable cluster_cut_table(const ClusterHierarchy& h);
 
-// The smallest threshold whose uniform cut has at most `budget` triangles (the
+// The smallest rank whose uniform cut has at most `budget` triangles (the
 // coarsest cut's when none has).
-float error_for_triangles(const ClusterCutTable& table, std::int64_t budget);
+float rank_for_triangles(const ClusterCutTable& table, std::int64_t budget);
 
-// The threshold a triangle budget gets (lod/level_budget.h): error_for_triangles',
+// The rank a triangle budget gets (lod/level_budget.h): rank_for_triangles',
 // or, where its cut falls more than 10 % short of the budget, the next finer
 // cut's when that is at most 10 % over.
-float error_for_budget(const ClusterCutTable& table, std::int64_t budget);
+float rank_for_budget(const ClusterCutTable& table, std::int64_t budget);
 
 // Appends the selected clusters' triangles, in order.
 void emit_clusters(const ClusterHierarchy& h, const std::vector<std::int32_t>& selected,

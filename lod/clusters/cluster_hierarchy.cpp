@@ -420,6 +420,7 @@ struct Block {
   ClusterHierarchy h;
   std::vector<Sphere> sphere;    // what a parent must enclose
   std::vector<float> own_error;  // of the group that made the cluster, 0 at full detail
+  std::vector<float> own_rank;   // the same in ClusterHierarchy::group_ranks' terms
   std::size_t seeds = 0;
   std::vector<std::int32_t> active;
   int round = 1;                 // the next DAG round
@@ -438,6 +439,7 @@ void add_seed(const Block& from, std::size_t c, Block* b) {
   b->h.clusters.push_back(cl);
   b->sphere.push_back(from.sphere[c]);
   b->own_error.push_back(from.own_error[c]);
+  b->own_rank.push_back(from.own_rank[c]);
   b->seeds = b->h.clusters.size();
 }
 
@@ -460,45 +462,72 @@ void add_group(Shared& s, const std::vector<std::int32_t>& members, SplitGroup& 
   const std::int32_t group = std::int32_t(h.groups.size());
   // Deviations of successive simplifications add up (the triangle
   // inequality), so the group's error is its own plus the worst below.
-  float below = 0;
+  float below = 0, below_rank = 0;
   std::vector<Sphere> children;
   for (std::int32_t c : members) {
     h.clusters[std::size_t(c)].parent_group = group;
     below = std::max(below, b->own_error[std::size_t(c)]);
+    below_rank = std::max(below_rank, b->own_rank[std::size_t(c)]);
     children.push_back(b->sphere[std::size_t(c)]);
   }
   const float error = std::max(below + made.simplified.error, s.error_floor);
+  const float rank = std::max(below_rank + made.simplified.mean_error, s.error_floor);
   const Sphere sphere = enclosing_sphere(children);
   h.groups.push_back({{sphere.center.x(), sphere.center.y(), sphere.center.z()}, sphere.radius, error});
+  h.group_ranks.push_back(rank);
   append_clusters(made, group, std::uint8_t(b->round), &h, next);
   b->sphere.resize(h.clusters.size(), sphere);
   b->own_error.resize(h.clusters.size(), error);
+  b->own_rank.resize(h.clusters.size(), rank);
 }
 
-// The hierarchy's last step. Where the rounds stall above kCoarsestTriangles
-// (a scan whose handles edge collapse cannot remove), everything left is one
-// group, clustered with its topology free but no piece lost, down to about
-// that many. Cuts above this step are untouched, so they stay as sound as
-// the full mesh.
+// The hierarchy's last steps. Where the rounds stall above kCoarsestTriangles
+// (a scan whose handles edge collapse cannot remove, with every group's
+// border locked), everything left is one group with no vertex locked,
+// halved step after step: by edge collapse, else by clustering that keeps
+// the surface sound (handles thinner than a cell close), else by clustering
+// with the topology free but no piece lost, which goes under
+// kSoundCutTriangles at once, so that every cut of more keeps the full
+// mesh's soundness. On the pair's scans at R = 1024 (281 handles) the rounds
+// stall at 3 917 triangles, which neither sound step shrinks: the cuts go on
+// at 453 and 255 triangles, where one step to 256 left 211.
 void finish_top(Shared& s, Lane& lane, Block* b) {
   ClusterHierarchy& h = b->h;
-  std::vector<Triangle> tris;
-  for (std::int32_t c : b->active) {
-    const Cluster& cl = h.clusters[std::size_t(c)];
-    for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t) {
-      const Triangle& o = h.triangles[t];
-      tris.push_back({s.weld[std::size_t(o[0])], s.weld[std::size_t(o[1])], s.weld[std::size_t(o[2])]});
+  const double share = s.options->reduction, stall = s.options->stall;
+  while (b->round < 255) {
+    std::vector<Triangle> tris;
+    for (std::int32_t c : b->active) {
+      const Cluster& cl = h.clusters[std::size_t(c)];
+      for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t) {
+        const Triangle& o = h.triangles[t];
+        tris.push_back({s.weld[std::size_t(o[0])], s.weld[std::size_t(o[1])], s.weld[std::size_t(o[2])]});
+      }
     }
+    const std::size_t n = tris.size();
+    if (n <= kCoarsestTriangles) return;
+    std::size_t target = std::max(kCoarsestTriangles, std::size_t(std::ceil(double(n) * share)));
+    SplitGroup top;
+    top.simplified = simplify_group(tris, target, lane.input);
+    if (double(top.simplified.triangles.size()) > stall * double(n) ||
+        folded(top.simplified, points_sphere(lane.input.positions, tris.data(), n).radius))
+      top.simplified = cluster_group(tris, target, lane.input);
+    if (double(top.simplified.triangles.size()) > stall * double(n)) {
+      if (n >= kSoundCutTriangles) target = std::min(target, kSoundCutTriangles - 1);
+      top.simplified = cluster_group(tris, target, lane.input, ClusterSoundness::kPiecesOnly);
+    }
+    if (top.simplified.triangles.size() >= n) return;
+    if (!lane.holds_placed) s.take_added(&top.simplified);
+    split_group(lane.input.positions, s.options->cluster_triangles, &top);
+    std::vector<std::int32_t> next;
+    const std::uint32_t first = std::uint32_t(h.triangles.size());
+    add_group(s, b->active, top, b, &next);
+    SimplifiedGroup& made = top.simplified;
+    if (!made.added_positions.empty())
+      b->held.push_back({first, std::uint32_t(h.triangles.size()), std::move(made.added_positions),
+                         std::move(made.added_normals), std::move(made.added_colors)});
+    b->active = std::move(next);
+    ++b->round;
   }
-  if (tris.size() <= kCoarsestTriangles || b->round >= 255) return;
-  SplitGroup top;
-  top.simplified = cluster_group(tris, kCoarsestTriangles, lane.input, ClusterSoundness::kPiecesOnly);
-  if (top.simplified.triangles.size() >= tris.size()) return;
-  split_group(lane.input.positions, s.options->cluster_triangles, &top);
-  std::vector<std::int32_t> next;
-  add_group(s, b->active, top, b, &next);
-  b->active = std::move(next);
-  ++b->round;
 }
 
 // Phase 3: round after round, the block's active clusters grouped, each group
@@ -536,6 +565,7 @@ void run_rounds(Shared& s, Lane& lane, Block* b, int rounds = 255, bool top = fa
     // Phase 3c: each group simplified to about half, on every core; its new
     // vertices numbered in group order (the same on any core count); then
     // each cut into clusters.
+    const double share = b->round == 1 ? options.first_reduction : options.reduction;
     std::vector<SplitGroup> result(members.size());
     std::vector<std::size_t> before(members.size(), 0);
     on_threads(members.size(), lane.threads, [&](std::size_t g) {
@@ -547,24 +577,22 @@ void run_rounds(Shared& s, Lane& lane, Block* b, int rounds = 255, bool top = fa
           tris.push_back({s.weld[std::size_t(o[0])], s.weld[std::size_t(o[1])], s.weld[std::size_t(o[2])]});
         }
       }
-      before[g] = tris.size();
-      const double reduction = b->round == 1 ? options.first_reduction : options.reduction;
-      const std::size_t target = std::size_t(std::ceil(double(tris.size()) * reduction));
+      const std::size_t n = tris.size();
+      before[g] = n;
+      const std::size_t target = std::size_t(std::ceil(double(n) * share));
+      const CollapseSequence sequence = simplify_steps(tris, target, lane.input);
+      std::size_t step = sequence.steps();
       SimplifiedGroup& simplified = result[g].simplified;
-      simplified = simplify_group(tris, target, lane.input);
+      simplified = sequence.take(step, lane.input);
       // Folded: collapses that only handles left room for dragged the
-      // surface across the group. Lighter targets, else a stall.
-      const float radius = points_sphere(lane.input.positions, tris.data(), tris.size()).radius;
-      for (double lighter : {0.5 * (1 + reduction), options.stall, 1.0}) {
+      // surface across the group. Fewer of them, else none.
+      const float radius = points_sphere(lane.input.positions, tris.data(), n).radius;
+      for (double lighter : {0.5 * (1 + share), options.stall, 1.0}) {
         if (!folded(simplified, radius)) break;
-        if (lighter == 1.0) {
-          simplified = SimplifiedGroup();
-          simplified.triangles = tris;
-          break;
-        }
-        simplified = simplify_group(tris, std::size_t(std::ceil(double(tris.size()) * lighter)), lane.input);
+        step = lighter == 1.0 ? 0 : std::min(step, sequence.step_keeping(std::size_t(std::ceil(double(n) * lighter))));
+        simplified = sequence.take(step, lane.input);
       }
-      if (double(simplified.triangles.size()) > options.stall * double(tris.size())) {
+      if (double(simplified.triangles.size()) > options.stall * double(n)) {
         // Stalled: collapses cannot remove what is left (handles, mostly).
         // Clustering the group as it came in, instead.
         simplified = cluster_group(tris, target, lane.input);
@@ -622,6 +650,7 @@ void run_rounds(Shared& s, Lane& lane, Block* b, int rounds = 255, bool top = fa
 void write_block(Block& b, bool last, bool keep, ClusterHierarchy* out, Block* carried, TriangleSpool* spool) {
   const std::int32_t offset = std::int32_t(out->groups.size());
   out->groups.insert(out->groups.end(), b.h.groups.begin(), b.h.groups.end());
+  out->group_ranks.insert(out->group_ranks.end(), b.h.group_ranks.begin(), b.h.group_ranks.end());
   auto global = [offset](std::int32_t local) { return local < 0 ? local : local + offset; };
   for (std::size_t c = 0; c < b.h.clusters.size(); ++c) {
     Cluster& cl = b.h.clusters[c];
@@ -772,6 +801,7 @@ Block first_round(Shared& s, Lane& lane, const Triangle* begin, const Triangle* 
   for (const Cluster& c : one.h.clusters)
     one.sphere.push_back(points_sphere(lane.input.positions, &one.h.triangles[c.first_triangle], c.triangle_count));
   one.own_error.assign(one.h.clusters.size(), 0.f);
+  one.own_rank.assign(one.h.clusters.size(), 0.f);
   one.seeds = one.h.clusters.size();
   one.round = round;
   run_rounds(s, lane, &one, 1);
@@ -841,8 +871,8 @@ namespace {
 
 std::string packed_block(const Block& b) {
   MessageWriter out;
-  out.put(b.h.clusters), out.put(b.h.triangles), out.put(b.h.groups);
-  out.put(b.sphere), out.put(b.own_error), out.put(b.active);
+  out.put(b.h.clusters), out.put(b.h.triangles), out.put(b.h.groups), out.put(b.h.group_ranks);
+  out.put(b.sphere), out.put(b.own_error), out.put(b.own_rank), out.put(b.active);
   out.put(std::uint64_t(b.seeds)), out.put(std::int32_t(b.round)), out.put(b.simplified);
   out.put(std::uint64_t(b.held.size()));
   for (const HeldPlaced& p : b.held) {
@@ -855,8 +885,8 @@ std::string packed_block(const Block& b) {
 Block unpacked_block(const std::string& bytes) {
   MessageReader in(bytes);
   Block b;
-  in.get(&b.h.clusters), in.get(&b.h.triangles), in.get(&b.h.groups);
-  in.get(&b.sphere), in.get(&b.own_error), in.get(&b.active);
+  in.get(&b.h.clusters), in.get(&b.h.triangles), in.get(&b.h.groups), in.get(&b.h.group_ranks);
+  in.get(&b.sphere), in.get(&b.own_error), in.get(&b.own_rank), in.get(&b.active);
   std::uint64_t seeds = 0, held = 0;
   std::int32_t round = 0;
   in.get(&seeds), in.get(&round), in.get(&b.simplified);
@@ -1312,6 +1342,7 @@ ClusterHierarchy build_cluster_hierarchy(ArrayView<Vec3f> positions, ArrayView<V
     for (const Cluster& c : all.h.clusters)
       all.sphere.push_back(points_sphere(positions, &all.h.triangles[c.first_triangle], c.triangle_count));
     all.own_error.assign(all.h.clusters.size(), 0.f);
+    all.own_rank.assign(all.h.clusters.size(), 0.f);
     all.seeds = all.h.clusters.size();
     run_rounds(s, main, &all, 255, true);
     h = std::move(all.h);

@@ -156,6 +156,14 @@ std::vector<SectionRow> ClusterSections::rows() {
        },
        3},
       {"CGRP", true, [](LodModel& m) { return array(m.clusters->groups); }, 3},
+      // 4.7 (and 3), optional: older readers rank the cuts by count with the errors.
+      {"CGRK", false,
+       [](LodModel& m) {
+         Payload p = array(m.clusters->group_ranks);
+         p.written = !m.clusters->group_ranks.empty();
+         return p;
+       },
+       3},
       // 4.4, optional: older readers read the clusters whole; this one derives
       // the pages. A hierarchy made by hand, without pages, goes without.
       {"PAGE", false,
@@ -245,6 +253,13 @@ void ClusterSections::decode(SectionReader& file, LodModel* model) {
       file.bad("section 'CGRP': group " + std::to_string(g) + " needs a finite centre, radius >= 0 and error > 0");
   }
   const std::int64_t groups = std::int64_t(h.groups.size());
+  const bool ranked = !h.group_ranks.empty();
+  if (ranked && h.group_ranks.size() != h.groups.size())
+    file.bad("section 'CGRK' has " + std::to_string(h.group_ranks.size()) + " ranks for " + std::to_string(groups) +
+        " groups");
+  for (std::size_t g = 0; g < h.group_ranks.size(); ++g)
+    if (!(std::isfinite(h.group_ranks[g]) && h.group_ranks[g] > 0))
+      file.bad("section 'CGRK': group " + std::to_string(g) + " needs a finite rank > 0");
   std::int64_t level0 = 0;
   for (std::size_t c = 0; c < h.clusters.size(); ++c) {
     const Cluster& cl = h.clusters[c];
@@ -261,6 +276,9 @@ void ClusterSections::decode(SectionReader& file, LodModel* model) {
     if (cl.own_group >= 0 && cl.parent_group >= 0 &&
         h.groups[std::size_t(cl.parent_group)].error < h.groups[std::size_t(cl.own_group)].error)
       file.bad(where() + "its parent group's error is below its own");
+    if (ranked && cl.own_group >= 0 && cl.parent_group >= 0 &&
+        h.group_ranks[std::size_t(cl.parent_group)] < h.group_ranks[std::size_t(cl.own_group)])
+      file.bad(where() + "its parent group's rank is below its own");
     if (cl.own_group < 0) level0 += cl.triangle_count;
   }
   if (level0 != h.full_triangles)

@@ -106,14 +106,16 @@ class ClusterLevels final : public StructureLevels {
     switch (request.kind) {
       case Kind::kPercent: {
         const double share = std::clamp(request.percent, 0.0, 100.0) / 100.0;
-        cut->error = error_for_triangles(table_, std::int64_t(std::floor(share * double(h_.full_triangles))));
-        select_clusters_by_error(h_, float(cut->error), &selected_);
+        select_clusters_by_rank(h_, rank_for_triangles(table_, std::int64_t(std::floor(share * double(h_.full_triangles)))),
+                                &selected_);
+        cut->error = cut_error(h_, selected_);
         break;
       }
       case Kind::kTriangles:
-        cut->error = request.strict ? error_for_triangles(table_, request.triangles)
-                                    : error_for_budget(table_, request.triangles);
-        select_clusters_by_error(h_, float(cut->error), &selected_);
+        select_clusters_by_rank(h_, request.strict ? rank_for_triangles(table_, request.triangles)
+                                                   : rank_for_budget(table_, request.triangles),
+                                &selected_);
+        cut->error = cut_error(h_, selected_);
         break;
       case Kind::kError:
         cut->error = request.error;

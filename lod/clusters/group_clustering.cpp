@@ -348,8 +348,11 @@ void split_cells(const std::vector<std::int32_t>& bad, Clustering* c) {
 
 // Phase 4: the measured error, as the collapse's: how far each vertex lies
 // from the triangles around its representative (from every triangle where
-// its whole cell vanished).
-double cluster_error(const Group& g, const Clustering& c) {
+// its whole cell vanished), the largest and the mean.
+struct MeasuredError {
+  double largest = 0, mean = 0;
+};
+MeasuredError cluster_error(const Group& g, const Clustering& c) {
   std::vector<std::int32_t> first(g.p.size() + 1, 0);
   for (const auto& x : c.out)
     for (std::int32_t v : x) ++first[std::size_t(v) + 1];
@@ -364,7 +367,8 @@ double cluster_error(const Group& g, const Clustering& c) {
     const auto& x = c.out[t];
     return point_triangle_distance2(q, g.p[std::size_t(x[0])], g.p[std::size_t(x[1])], g.p[std::size_t(x[2])]);
   };
-  double worst = 0;
+  MeasuredError e;
+  std::size_t count = 0;
   for (std::size_t v = 0; v < g.p.size(); ++v) {
     const std::size_t r = std::size_t(c.rep[v]);
     if (r == v && first[r + 1] > first[r]) continue;
@@ -372,9 +376,12 @@ double cluster_error(const Group& g, const Clustering& c) {
     for (std::int32_t i = first[r]; i < first[r + 1]; ++i) nearest = std::min(nearest, distance2(g.p[v], std::size_t(incident[std::size_t(i)])));
     if (first[r + 1] == first[r])
       for (std::size_t t = 0; t < c.out.size(); ++t) nearest = std::min(nearest, distance2(g.p[v], t));
-    if (std::isfinite(nearest)) worst = std::max(worst, nearest);
+    if (!std::isfinite(nearest)) continue;
+    nearest = std::sqrt(nearest);
+    e.largest = std::max(e.largest, nearest), e.mean += nearest, ++count;
   }
-  return std::sqrt(worst);
+  if (count > 0) e.mean /= double(count);
+  return e;
 }
 
 }  // namespace
@@ -413,7 +420,9 @@ SimplifiedGroup cluster_group(const std::vector<Triangle>& triangles, std::size_
   best.triangles.clear();
   for (const auto& x : best_clustering.out)
     best.triangles.push_back({g.global[std::size_t(x[0])], g.global[std::size_t(x[1])], g.global[std::size_t(x[2])]});
-  best.error = float(cluster_error(g, best_clustering));
+  const MeasuredError e = cluster_error(g, best_clustering);
+  best.error = float(e.largest);
+  best.mean_error = float(e.mean);
   return best;
 }
 

@@ -338,30 +338,24 @@ bool collapse_allowed(GroupTopology* g, int from, int to, const Eigen::Vector3d&
   return true;
 }
 
-// Phase: the group's error, measured: how far each vertex that went or
-// moved lies, where it was, from the triangles around the vertex that stands
-// for it now (a one-sided Hausdorff distance over the group's vertices, in
-// scaled units).
-double removed_vertex_distance(GroupTopology& g, std::vector<int>& moved_to, const std::vector<std::uint8_t>& moved,
-                               const std::vector<std::array<double, kMaxDim>>& origin,
-                               const std::vector<std::array<double, kMaxDim>>& x) {
-  auto point = [&](int v) { return Eigen::Vector3d(x[std::size_t(v)][0], x[std::size_t(v)][1], x[std::size_t(v)][2]); };
-  double worst = 0;
-  for (std::size_t r = 0; r < moved_to.size(); ++r) {
-    if (moved_to[r] < 0 && !moved[r]) continue;
-    int rep = int(r);
-    while (moved_to[std::size_t(rep)] >= 0) rep = moved_to[std::size_t(rep)];
-    if (moved_to[r] >= 0) moved_to[r] = rep;  // shortens the chain for the next ones
-    const Eigen::Vector3d p(origin[r][0], origin[r][1], origin[r][2]);
-    double nearest = std::numeric_limits<double>::infinity();
-    for (int t : g.incident[std::size_t(rep)]) {
-      if (g.dead[std::size_t(t)]) continue;
-      const auto& tri = g.tris[std::size_t(t)];
-      nearest = std::min(nearest, std::sqrt(point_triangle_distance2(p, point(tri[0]), point(tri[1]), point(tri[2]))));
-    }
-    if (std::isfinite(nearest)) worst = std::max(worst, nearest);
+// The normal where a quadric over position and normal (kNormalDim = 6,
+// normals scaled by their weight) is least at position `p`: the normal
+// block's 3x3 system with the position held. `fallback` where it is
+// singular.
+Vec3f normal_at(const double* q, const double* p, const Vec3f& fallback) {
+  constexpr int D = 6, n = Quadric::upper(D);
+  auto a = [&](int i, int j) { return i <= j ? q[Quadric::row(i, D) + j - i] : q[Quadric::row(j, D) + i - j]; };
+  Eigen::Matrix3d m;
+  Eigen::Vector3d rhs;
+  for (int i = 0; i < 3; ++i) {
+    rhs[i] = -q[n + 3 + i];
+    for (int j = 0; j < 3; ++j) m(i, j) = a(3 + i, 3 + j), rhs[i] -= a(j, 3 + i) * p[j];
   }
-  return worst;
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(m);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > kSingular * ldlt.vectorD().maxCoeff())) return fallback;
+  const Eigen::Vector3d solved = ldlt.solve(rhs);
+  if (!solved.allFinite() || !(solved.norm() > 0)) return fallback;
+  return solved.normalized().cast<float>();
 }
 
 }  // namespace
@@ -394,14 +388,17 @@ std::vector<std::int32_t> load_group(const std::vector<Triangle>& triangles, con
   return global;
 }
 
-// Phase 2: each vertex's generalized quadric (position, and normal and colour
-// when weighted), with border planes so that borders slide along themselves.
+// Phase 2: each vertex's quadric over position (and colour when weighted),
+// with border planes so that borders slide along themselves. Normals stay
+// out of it (take() solves them afterwards): weighed in at 0.0005 of the
+// diagonal a radian, they outweighed positions at fine levels, where
+// deviations are a few millionths of the diagonal.
 void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& global, const SimplifyInput& in,
-                    bool use_normals, bool use_colors, GroupQuadrics* quadrics) {
+                    bool use_colors, GroupQuadrics* quadrics) {
   const JoinedView<Vec3f>& positions = in.positions;
   GroupQuadrics& q = *quadrics;
   const std::size_t nv = global.size();
-  q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
+  q.dim = 3 + (use_colors ? 3 : 0);
   q.scale = in.scale;
   q.x.resize(nv);
   q.full.assign(nv * std::size_t(Quadric::size(q.dim)), 0.0);
@@ -410,8 +407,6 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
     double* x = q.x[v].data();
     int d = 0;
     for (int i = 0; i < 3; ++i) x[d++] = double(positions[gv][i]) * in.scale;
-    if (use_normals)
-      for (int i = 0; i < 3; ++i) x[d++] = double(in.normals[gv][i]) * in.normal_weight;
     if (use_colors)
       for (int i = 0; i < 3; ++i) x[d++] = double(in.colors[gv][std::size_t(i)]) / 255.0 * in.color_weight;
   }
@@ -499,10 +494,11 @@ Meeting meeting(const GroupTopology& g, const GroupQuadrics& q, int from, int to
 }
 
 // Phase 3b: collapses the cheapest edge first until `target` triangles are
-// left. Returns, per vertex, where it went (-1: kept); `moved` marks the
-// kept vertices that are no longer where they were.
-std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopology* group, GroupQuadrics* quadrics,
-                                    std::vector<std::uint8_t>* moved) {
+// left or none may collapse, telling `collapsed(from, to, x, live)`
+// of each: `from` went onto `to`, now at x, leaving `live` triangles.
+template <class Collapsed>
+void collapse_to_target(std::size_t target, bool optimal, GroupTopology* group, GroupQuadrics* quadrics,
+                        Collapsed collapsed) {
   GroupTopology& g = *group;
   GroupQuadrics& q = *quadrics;
   const std::size_t nv = q.x.size();
@@ -518,8 +514,6 @@ std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopol
   };
   std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> heap;
   std::vector<std::uint8_t> removed(nv, 0);
-  moved->assign(nv, 0);
-  std::vector<int> moved_to(nv, -1);  // where each removed vertex went
   std::vector<int> around;
   // Both directions of an edge, or one where both ends move freely (they
   // meet at the same point either way).
@@ -580,9 +574,8 @@ std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopol
       g.incident[std::size_t(c.to)].push_back(t);
     }
     removed[std::size_t(c.from)] = 1;
-    moved_to[std::size_t(c.from)] = c.to;
-    if (!std::equal(m.x.begin(), m.x.begin() + q.dim, q.x[std::size_t(c.to)].begin()))
-      q.x[std::size_t(c.to)] = m.x, (*moved)[std::size_t(c.to)] = 1;
+    q.x[std::size_t(c.to)] = m.x;
+    collapsed(c.from, c.to, m.x.data(), live);
     Quadric::add(q.quadric(std::size_t(c.to)), q.quadric(std::size_t(c.from)), q.dim);
     ++version[std::size_t(c.to)];
     auto& list = g.incident[std::size_t(c.to)];
@@ -590,51 +583,128 @@ std::vector<int> collapse_to_target(std::size_t target, bool optimal, GroupTopol
                list.end());
     push_around(c.to);
   }
-
-  return moved_to;
 }
 
-SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size_t target,
-                               const SimplifyInput& in) {
-  const bool use_normals = in.normal_weight > 0 && !in.normals.empty();
+CollapseSequence simplify_steps(const std::vector<Triangle>& triangles, std::size_t floor,
+                                const SimplifyInput& in) {
   const bool use_colors = in.color_weight > 0 && !in.colors.empty();
   thread_local GroupTopology g;
   thread_local GroupQuadrics q;  // reused: a group's quadrics are about half a megabyte
-  thread_local std::vector<std::array<double, kMaxDim>> origin;
-  thread_local std::vector<std::uint8_t> moved;
-  const std::vector<std::int32_t> global = load_group(triangles, in, &g);
-  group_quadrics(g, global, in, use_normals, use_colors, &q);
-  origin = q.x;
-  std::vector<int> moved_to = collapse_to_target(target, in.optimal_placement, &g, &q, &moved);
+  CollapseSequence s;
+  s.global_ = load_group(triangles, in, &g);
+  s.triangles_ = g.tris;
+  group_quadrics(g, s.global_, in, use_colors, &q);
+  const int dim = q.dim;
+  s.dim_ = dim;
+  s.origin_.resize(q.x.size() * std::size_t(dim));
+  for (std::size_t v = 0; v < q.x.size(); ++v) std::copy_n(q.x[v].data(), dim, &s.origin_[v * std::size_t(dim)]);
+  collapse_to_target(floor, in.optimal_placement, &g, &q, [&](int from, int to, const double* x, std::size_t live) {
+    s.from_.push_back(from);
+    s.to_.push_back(to);
+    s.at_.insert(s.at_.end(), x, x + dim);
+    s.live_.push_back(std::uint32_t(live));
+  });
+  return s;
+}
 
-  // Moved vertices become new ones, numbered -1, -2, ... in the order of
-  // their first use.
+std::size_t CollapseSequence::step_keeping(std::size_t triangles) const {
+  if (triangles_.size() < triangles) return 0;
+  // live_ falls step by step: the first step below `triangles`.
+  return std::size_t(std::partition_point(live_.begin(), live_.end(), [&](std::uint32_t left) { return left >= triangles; }) -
+                     live_.begin());
+}
+
+// Phase 4: the group after its first `step` collapses, replayed from the
+// start: each vertex's representative by the collapses' chains, triangles
+// whose corners meet dropped (the link condition lets only the collapsed
+// edges' triangles meet), and moved vertices numbered anew, -1, -2, ... in
+// the order of their first use.
+SimplifiedGroup CollapseSequence::take(std::size_t step, const SimplifyInput& in) const {
+  const bool use_normals = in.normal_weight > 0 && !in.normals.empty();
+  const bool use_colors = in.color_weight > 0 && !in.colors.empty();
+  const std::size_t nv = global_.size(), dim = std::size_t(dim_);
+  step = std::min(step, steps());
+  thread_local std::vector<int> rep, first, incident;
+  thread_local std::vector<double> x;
+  thread_local std::vector<std::uint8_t> moved;
+  rep.assign(nv, -1);
+  moved.assign(nv, 0);
+  x.assign(origin_.begin(), origin_.end());
+  for (std::size_t i = 0; i < step; ++i) {
+    const std::size_t to = std::size_t(to_[i]);
+    rep[std::size_t(from_[i])] = to_[i];
+    const double* at = &at_[i * dim];
+    double* now = &x[to * dim];
+    if (!std::equal(at, at + dim, now)) std::copy_n(at, dim, now), moved[to] = 1;
+  }
+  auto find = [&](int v) {
+    int r = v;
+    while (rep[std::size_t(r)] >= 0) r = rep[std::size_t(r)];
+    while (rep[std::size_t(v)] >= 0 && rep[std::size_t(v)] != r) {
+      const int next = rep[std::size_t(v)];
+      rep[std::size_t(v)] = r;
+      v = next;
+    }
+    return r;
+  };
+
   SimplifiedGroup out;
-  std::vector<std::int32_t> id(global.begin(), global.end());
-  for (std::size_t t = 0; t < g.tris.size(); ++t) {
-    if (g.dead[t]) continue;
+  std::vector<std::array<int, 3>> live;
+  live.reserve(triangles_at(step));
+  for (const auto& t : triangles_) {
+    const std::array<int, 3> r{find(t[0]), find(t[1]), find(t[2])};
+    if (r[0] != r[1] && r[1] != r[2] && r[0] != r[2]) live.push_back(r);
+  }
+  // Phase 4b: the quadric over position and normal of each moved vertex,
+  // summed over the vertices it stands for, as the collapses would have
+  // summed them.
+  constexpr int kNormalDim = 6;
+  constexpr int kNormalSize = Quadric::size(kNormalDim);
+  thread_local std::vector<double> normal_quadric;
+  if (use_normals) {
+    normal_quadric.assign(nv * std::size_t(kNormalSize), 0.0);
+    for (const auto& t : triangles_) {
+      const std::array<int, 3> r{find(t[0]), find(t[1]), find(t[2])};
+      if (!moved[std::size_t(r[0])] && !moved[std::size_t(r[1])] && !moved[std::size_t(r[2])]) continue;
+      double corner[3][kMaxDim];
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t v = std::size_t(t[std::size_t(k)]);
+        const Vec3f& n = in.normals[std::size_t(global_[v])];
+        for (int i = 0; i < 3; ++i) corner[k][i] = origin_[v * dim + std::size_t(i)], corner[k][3 + i] = double(n[i]) * in.normal_weight;
+      }
+      const Eigen::Vector3d a(corner[0][0], corner[0][1], corner[0][2]), b(corner[1][0], corner[1][1], corner[1][2]),
+          c(corner[2][0], corner[2][1], corner[2][2]);
+      const double area = 0.5 * (b - a).cross(c - a).norm();
+      double basis[2][kMaxDim];
+      if (!(area > 0) || !triangle_basis(corner[0], corner[1], corner[2], kNormalDim, basis)) continue;
+      double plane[kNormalSize] = {};
+      Quadric::add_plane(plane, corner[0], basis, kNormalDim, kNormalDim, area);
+      for (int v : r)
+        if (moved[std::size_t(v)]) Quadric::add(&normal_quadric[std::size_t(v) * kNormalSize], plane, kNormalDim);
+    }
+  }
+
+  std::vector<std::int32_t> id(global_.begin(), global_.end());
+  out.triangles.reserve(live.size());
+  for (const auto& t : live) {
     Triangle tri;
     for (int k = 0; k < 3; ++k) {
-      const std::size_t v = std::size_t(g.tris[t][std::size_t(k)]);
+      const std::size_t v = std::size_t(t[std::size_t(k)]);
       if (moved[v] == 1) {
         moved[v] = 2;
         id[v] = -1 - std::int32_t(out.added_positions.size());
-        const double* x = q.x[v].data();
-        out.added_positions.push_back(Vec3f(float(x[0] / in.scale), float(x[1] / in.scale), float(x[2] / in.scale)));
+        const double* p = &x[v * dim];
+        out.added_positions.push_back(Vec3f(float(p[0] / in.scale), float(p[1] / in.scale), float(p[2] / in.scale)));
         if (!in.normals.empty()) {
-          Vec3f n = in.normals[std::size_t(global[v])];
-          if (use_normals) {
-            const Vec3f solved{float(x[3]), float(x[4]), float(x[5])};
-            if (solved.norm() > 0) n = solved.normalized();
-          }
+          Vec3f n = in.normals[std::size_t(global_[v])];
+          if (use_normals) n = normal_at(&normal_quadric[v * kNormalSize], p, n);
           out.added_normals.push_back(n);
         }
         if (!in.colors.empty()) {
-          Rgb c = in.colors[std::size_t(global[v])];
+          Rgb c = in.colors[std::size_t(global_[v])];
           if (use_colors) {
-            const int at = use_normals ? 6 : 3;
             for (int i = 0; i < 3; ++i)
-              c[std::size_t(i)] = std::uint8_t(std::clamp(std::lround(x[at + i] / in.color_weight * 255.0), 0L, 255L));
+              c[std::size_t(i)] = std::uint8_t(std::clamp(std::lround(p[3 + i] / in.color_weight * 255.0), 0L, 255L));
           }
           out.added_colors.push_back(c);
         }
@@ -643,8 +713,45 @@ SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size
     }
     out.triangles.push_back(tri);
   }
-  out.error = float(removed_vertex_distance(g, moved_to, moved, origin, q.x) / in.scale);
+
+  // The error, measured: how far each vertex that went or moved lies, where
+  // it was, from the triangles around the vertex that stands for it now: the
+  // largest (a one-sided Hausdorff distance over the group's vertices) and
+  // the mean.
+  first.assign(nv + 1, 0);
+  for (const auto& t : live)
+    for (int v : t) ++first[std::size_t(v) + 1];
+  for (std::size_t v = 0; v < nv; ++v) first[v + 1] += first[v];
+  incident.resize(std::size_t(first[nv]));
+  for (std::size_t t = 0; t < live.size(); ++t)
+    for (int v : live[t]) incident[std::size_t(first[std::size_t(v)]++)] = int(t);
+  for (std::size_t v = nv; v > 0; --v) first[v] = first[v - 1];
+  first[0] = 0;
+  auto point = [&](int v) { return Eigen::Vector3d(x[std::size_t(v) * dim], x[std::size_t(v) * dim + 1], x[std::size_t(v) * dim + 2]); };
+  double worst = 0, sum = 0;
+  std::size_t count = 0;
+  for (std::size_t r = 0; r < nv; ++r) {
+    if (rep[r] < 0 && !moved[r]) continue;
+    const std::size_t stands = std::size_t(find(int(r)));
+    const Eigen::Vector3d p(origin_[r * dim], origin_[r * dim + 1], origin_[r * dim + 2]);
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int i = first[stands]; i < first[stands + 1]; ++i) {
+      const auto& tri = live[std::size_t(incident[std::size_t(i)])];
+      nearest = std::min(nearest, point_triangle_distance2(p, point(tri[0]), point(tri[1]), point(tri[2])));
+    }
+    if (!std::isfinite(nearest)) continue;
+    nearest = std::sqrt(nearest);
+    worst = std::max(worst, nearest), sum += nearest, ++count;
+  }
+  out.error = float(worst / in.scale);
+  out.mean_error = count > 0 ? float(sum / double(count) / in.scale) : 0.0f;
   return out;
+}
+
+SimplifiedGroup simplify_group(const std::vector<Triangle>& triangles, std::size_t target,
+                               const SimplifyInput& in) {
+  const CollapseSequence s = simplify_steps(triangles, target, in);
+  return s.take(s.steps(), in);
 }
 
 }  // namespace scan2lod
