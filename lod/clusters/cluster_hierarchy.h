@@ -75,8 +75,9 @@ struct ClusterHierarchy {
   // (GroupBound::error) bounds what a cut at an error, or on screen, may
   // show; ranked by it, groups with one stray vertex came late in every cut
   // by count (the pair's scans at R = 256 cut at 50 k and 100 k of 196 k
-  // triangles: 1.18x and 1.73x VTK QuadricDecimation's error, 1.08x and
-  // 1.39x ranked by the mean). Empty (a model from before 4.7): the errors.
+  // triangles: 1.16x and 1.65x VTK QuadricDecimation's error, 1.12x and
+  // 1.53x ranked by the mean, normals at 0.0005). Empty (a model from
+  // before 4.7): the errors.
   std::vector<float> group_ranks;
   std::int64_t full_triangles = 0;    // triangles of the full-detail cut
   // Set by a build in blocks with a spool: `triangles` is empty and the
@@ -143,13 +144,15 @@ struct ClusterOptions {
   // Metrics*, 1998), against positions scaled to a unit diagonal: a unit
   // normal turned by 90 degrees or a colour channel running its whole range
   // costs what a move of `weight` diagonals does. 0 ignores the attribute.
-  // Colours join the quadric that chooses and places collapses (at 0.0005
-  // they no longer kept a scanned sphere's colour bands: tests/test_clusters);
-  // normals do not, and are solved from their own quadric where each placed
-  // vertex is: in the collapses' quadric, at 0.0005, they outweighed
-  // positions at fine levels (the pair's scans cut at 100 k of 196 k
-  // triangles: 1.65x VTK QuadricDecimation's error with them, 1.39x without).
-  float normal_weight = 0.0005f;
+  // Normals at 0.002 chose the collapses at fine levels (the bunny at R = 128
+  // was 1.47x meshopt_simplify's error at 50k, 1.08x at 0.0005); at 0.0005
+  // still, where deviations are millionths of the diagonal (with groups
+  // ranked by their mean deviation, the pair's scans at R = 256 cut at 100 k
+  // of 196 k triangles were 1.53x VTK QuadricDecimation's error; 1.40x at
+  // 0.0001, 1.39x without normals, whose cuts on screen at 1 px held 24 %
+  // more triangles than at 0.0001). Colours at 0.0005 no longer kept a
+  // scanned sphere's colour bands (tests/test_clusters).
+  float normal_weight = 0.0001f;
   float color_weight = 0.002f;
   // Each collapse places its vertex at the quadric's minimum, adding a
   // vertex; false keeps an end of the edge and adds none.

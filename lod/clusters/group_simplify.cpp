@@ -338,26 +338,6 @@ bool collapse_allowed(GroupTopology* g, int from, int to, const Eigen::Vector3d&
   return true;
 }
 
-// The normal where a quadric over position and normal (kNormalDim = 6,
-// normals scaled by their weight) is least at position `p`: the normal
-// block's 3x3 system with the position held. `fallback` where it is
-// singular.
-Vec3f normal_at(const double* q, const double* p, const Vec3f& fallback) {
-  constexpr int D = 6, n = Quadric::upper(D);
-  auto a = [&](int i, int j) { return i <= j ? q[Quadric::row(i, D) + j - i] : q[Quadric::row(j, D) + i - j]; };
-  Eigen::Matrix3d m;
-  Eigen::Vector3d rhs;
-  for (int i = 0; i < 3; ++i) {
-    rhs[i] = -q[n + 3 + i];
-    for (int j = 0; j < 3; ++j) m(i, j) = a(3 + i, 3 + j), rhs[i] -= a(j, 3 + i) * p[j];
-  }
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(m);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > kSingular * ldlt.vectorD().maxCoeff())) return fallback;
-  const Eigen::Vector3d solved = ldlt.solve(rhs);
-  if (!solved.allFinite() || !(solved.norm() > 0)) return fallback;
-  return solved.normalized().cast<float>();
-}
-
 }  // namespace
 
 // Phase 1: the group's triangles in local indices, with their incidence and
@@ -388,17 +368,14 @@ std::vector<std::int32_t> load_group(const std::vector<Triangle>& triangles, con
   return global;
 }
 
-// Phase 2: each vertex's quadric over position (and colour when weighted),
-// with border planes so that borders slide along themselves. Normals stay
-// out of it (take() solves them afterwards): weighed in at 0.0005 of the
-// diagonal a radian, they outweighed positions at fine levels, where
-// deviations are a few millionths of the diagonal.
+// Phase 2: each vertex's generalized quadric (position, and normal and colour
+// when weighted), with border planes so that borders slide along themselves.
 void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& global, const SimplifyInput& in,
-                    bool use_colors, GroupQuadrics* quadrics) {
+                    bool use_normals, bool use_colors, GroupQuadrics* quadrics) {
   const JoinedView<Vec3f>& positions = in.positions;
   GroupQuadrics& q = *quadrics;
   const std::size_t nv = global.size();
-  q.dim = 3 + (use_colors ? 3 : 0);
+  q.dim = 3 + (use_normals ? 3 : 0) + (use_colors ? 3 : 0);
   q.scale = in.scale;
   q.x.resize(nv);
   q.full.assign(nv * std::size_t(Quadric::size(q.dim)), 0.0);
@@ -407,6 +384,8 @@ void group_quadrics(const GroupTopology& g, const std::vector<std::int32_t>& glo
     double* x = q.x[v].data();
     int d = 0;
     for (int i = 0; i < 3; ++i) x[d++] = double(positions[gv][i]) * in.scale;
+    if (use_normals)
+      for (int i = 0; i < 3; ++i) x[d++] = double(in.normals[gv][i]) * in.normal_weight;
     if (use_colors)
       for (int i = 0; i < 3; ++i) x[d++] = double(in.colors[gv][std::size_t(i)]) / 255.0 * in.color_weight;
   }
@@ -587,13 +566,14 @@ void collapse_to_target(std::size_t target, bool optimal, GroupTopology* group, 
 
 CollapseSequence simplify_steps(const std::vector<Triangle>& triangles, std::size_t floor,
                                 const SimplifyInput& in) {
+  const bool use_normals = in.normal_weight > 0 && !in.normals.empty();
   const bool use_colors = in.color_weight > 0 && !in.colors.empty();
   thread_local GroupTopology g;
   thread_local GroupQuadrics q;  // reused: a group's quadrics are about half a megabyte
   CollapseSequence s;
   s.global_ = load_group(triangles, in, &g);
   s.triangles_ = g.tris;
-  group_quadrics(g, s.global_, in, use_colors, &q);
+  group_quadrics(g, s.global_, in, use_normals, use_colors, &q);
   const int dim = q.dim;
   s.dim_ = dim;
   s.origin_.resize(q.x.size() * std::size_t(dim));
@@ -655,35 +635,6 @@ SimplifiedGroup CollapseSequence::take(std::size_t step, const SimplifyInput& in
     const std::array<int, 3> r{find(t[0]), find(t[1]), find(t[2])};
     if (r[0] != r[1] && r[1] != r[2] && r[0] != r[2]) live.push_back(r);
   }
-  // Phase 4b: the quadric over position and normal of each moved vertex,
-  // summed over the vertices it stands for, as the collapses would have
-  // summed them.
-  constexpr int kNormalDim = 6;
-  constexpr int kNormalSize = Quadric::size(kNormalDim);
-  thread_local std::vector<double> normal_quadric;
-  if (use_normals) {
-    normal_quadric.assign(nv * std::size_t(kNormalSize), 0.0);
-    for (const auto& t : triangles_) {
-      const std::array<int, 3> r{find(t[0]), find(t[1]), find(t[2])};
-      if (!moved[std::size_t(r[0])] && !moved[std::size_t(r[1])] && !moved[std::size_t(r[2])]) continue;
-      double corner[3][kMaxDim];
-      for (int k = 0; k < 3; ++k) {
-        const std::size_t v = std::size_t(t[std::size_t(k)]);
-        const Vec3f& n = in.normals[std::size_t(global_[v])];
-        for (int i = 0; i < 3; ++i) corner[k][i] = origin_[v * dim + std::size_t(i)], corner[k][3 + i] = double(n[i]) * in.normal_weight;
-      }
-      const Eigen::Vector3d a(corner[0][0], corner[0][1], corner[0][2]), b(corner[1][0], corner[1][1], corner[1][2]),
-          c(corner[2][0], corner[2][1], corner[2][2]);
-      const double area = 0.5 * (b - a).cross(c - a).norm();
-      double basis[2][kMaxDim];
-      if (!(area > 0) || !triangle_basis(corner[0], corner[1], corner[2], kNormalDim, basis)) continue;
-      double plane[kNormalSize] = {};
-      Quadric::add_plane(plane, corner[0], basis, kNormalDim, kNormalDim, area);
-      for (int v : r)
-        if (moved[std::size_t(v)]) Quadric::add(&normal_quadric[std::size_t(v) * kNormalSize], plane, kNormalDim);
-    }
-  }
-
   std::vector<std::int32_t> id(global_.begin(), global_.end());
   out.triangles.reserve(live.size());
   for (const auto& t : live) {
@@ -697,14 +648,17 @@ SimplifiedGroup CollapseSequence::take(std::size_t step, const SimplifyInput& in
         out.added_positions.push_back(Vec3f(float(p[0] / in.scale), float(p[1] / in.scale), float(p[2] / in.scale)));
         if (!in.normals.empty()) {
           Vec3f n = in.normals[std::size_t(global_[v])];
-          if (use_normals) n = normal_at(&normal_quadric[v * kNormalSize], p, n);
+          if (use_normals) {
+            const Vec3f solved{float(p[3]), float(p[4]), float(p[5])};
+            if (solved.norm() > 0) n = solved.normalized();
+          }
           out.added_normals.push_back(n);
         }
         if (!in.colors.empty()) {
           Rgb c = in.colors[std::size_t(global_[v])];
           if (use_colors) {
             for (int i = 0; i < 3; ++i)
-              c[std::size_t(i)] = std::uint8_t(std::clamp(std::lround(p[3 + i] / in.color_weight * 255.0), 0L, 255L));
+              c[std::size_t(i)] = std::uint8_t(std::clamp(std::lround(p[dim - 3 + i] / in.color_weight * 255.0), 0L, 255L));
           }
           out.added_colors.push_back(c);
         }

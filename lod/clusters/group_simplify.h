@@ -1,11 +1,8 @@
 // One group of the cluster hierarchy simplified by edge collapse under
 // generalized quadrics (Garland and Heckbert, *Simplifying Surfaces with Color
-// and Texture using Quadric Error Metrics*, 1998): positions and colours in
-// the quadric that orders the collapses, each merged vertex placed where it is
-// least, colour with it; the normal there from a second generalized quadric,
-// over position and normal, held at that position. Normals in the first
-// quadric outweighed positions at fine levels, where deviations are
-// millionths of the diagonal.
+// and Texture using Quadric Error Metrics*, 1998): positions, normals and
+// colours in one quadric, so attributes survive at every level, and each
+// merged vertex placed where that quadric is least, attributes with it.
 // Vertices the group shares with others are locked; the scan's real
 // boundaries slide along themselves under boundary constraint planes.
 //
@@ -29,7 +26,7 @@ struct SimplifyInput {
   // locked[v] != 0: v is shared with another group and must not move.
   const std::vector<std::uint8_t>* locked = nullptr;
   float scale = 1;           // 1 / the mesh's diagonal: quadrics see a unit-sized mesh
-  float normal_weight = 0;   // in the normals' quadric (0: placed vertices keep an end's normal); see ClusterOptions
+  float normal_weight = 0;   // see ClusterOptions
   float color_weight = 0;
   // A collapse places the vertex at its quadric's minimum (a new vertex);
   // false keeps one of the edge's ends (half-edge collapse, no new vertex).
