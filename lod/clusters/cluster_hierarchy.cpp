@@ -454,12 +454,28 @@ bool folded(const SimplifiedGroup& g, float radius) {
   return g.error * std::sqrt(float(std::max<std::size_t>(g.triangles.size(), 1))) > kFolded * radius;
 }
 
+// The triangles of `clusters`, over welded vertices: a group as the
+// simplifier takes it.
+std::vector<Triangle> welded_triangles(const Shared& s, const ClusterHierarchy& h, const std::vector<std::int32_t>& clusters) {
+  std::vector<Triangle> tris;
+  for (std::int32_t c : clusters) {
+    const Cluster& cl = h.clusters[std::size_t(c)];
+    for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t) {
+      const Triangle& o = h.triangles[t];
+      tris.push_back({s.weld[std::size_t(o[0])], s.weld[std::size_t(o[1])], s.weld[std::size_t(o[2])]});
+    }
+  }
+  return tris;
+}
+
 // Phase 3d: a group that simplified becomes a DAG node over `members`; its
-// output, cut into clusters, joins `next`.
+// output, cut into clusters, joins `next`. Vertices it placed that its lane
+// holds back stay with its triangles until the block is committed.
 void add_group(Shared& s, const std::vector<std::int32_t>& members, SplitGroup& made, Block* b,
                std::vector<std::int32_t>* next) {
   ClusterHierarchy& h = b->h;
   const std::int32_t group = std::int32_t(h.groups.size());
+  const std::uint32_t first = std::uint32_t(h.triangles.size());
   // Deviations of successive simplifications add up (the triangle
   // inequality), so the group's error is its own plus the worst below.
   float below = 0, below_rank = 0;
@@ -479,6 +495,10 @@ void add_group(Shared& s, const std::vector<std::int32_t>& members, SplitGroup& 
   b->sphere.resize(h.clusters.size(), sphere);
   b->own_error.resize(h.clusters.size(), error);
   b->own_rank.resize(h.clusters.size(), rank);
+  SimplifiedGroup& placed = made.simplified;
+  if (!placed.added_positions.empty())
+    b->held.push_back({first, std::uint32_t(h.triangles.size()), std::move(placed.added_positions),
+                       std::move(placed.added_normals), std::move(placed.added_colors)});
 }
 
 // The hierarchy's last steps. Where the rounds stall above kCoarsestTriangles
@@ -495,14 +515,7 @@ void finish_top(Shared& s, Lane& lane, Block* b) {
   ClusterHierarchy& h = b->h;
   const double share = s.options->reduction, stall = s.options->stall;
   while (b->round < 255) {
-    std::vector<Triangle> tris;
-    for (std::int32_t c : b->active) {
-      const Cluster& cl = h.clusters[std::size_t(c)];
-      for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t) {
-        const Triangle& o = h.triangles[t];
-        tris.push_back({s.weld[std::size_t(o[0])], s.weld[std::size_t(o[1])], s.weld[std::size_t(o[2])]});
-      }
-    }
+    const std::vector<Triangle> tris = welded_triangles(s, h, b->active);
     const std::size_t n = tris.size();
     if (n <= kCoarsestTriangles) return;
     std::size_t target = std::max(kCoarsestTriangles, std::size_t(std::ceil(double(n) * share)));
@@ -519,12 +532,7 @@ void finish_top(Shared& s, Lane& lane, Block* b) {
     if (!lane.holds_placed) s.take_added(&top.simplified);
     split_group(lane.input.positions, s.options->cluster_triangles, &top);
     std::vector<std::int32_t> next;
-    const std::uint32_t first = std::uint32_t(h.triangles.size());
     add_group(s, b->active, top, b, &next);
-    SimplifiedGroup& made = top.simplified;
-    if (!made.added_positions.empty())
-      b->held.push_back({first, std::uint32_t(h.triangles.size()), std::move(made.added_positions),
-                         std::move(made.added_normals), std::move(made.added_colors)});
     b->active = std::move(next);
     ++b->round;
   }
@@ -569,14 +577,7 @@ void run_rounds(Shared& s, Lane& lane, Block* b, int rounds = 255, bool top = fa
     std::vector<SplitGroup> result(members.size());
     std::vector<std::size_t> before(members.size(), 0);
     on_threads(members.size(), lane.threads, [&](std::size_t g) {
-      std::vector<Triangle> tris;
-      for (std::int32_t c : members[g]) {
-        const Cluster& cl = h.clusters[std::size_t(c)];
-        for (std::uint32_t t = cl.first_triangle; t < cl.first_triangle + cl.triangle_count; ++t) {
-          const Triangle& o = h.triangles[t];
-          tris.push_back({s.weld[std::size_t(o[0])], s.weld[std::size_t(o[1])], s.weld[std::size_t(o[2])]});
-        }
-      }
+      const std::vector<Triangle> tris = welded_triangles(s, h, members[g]);
       const std::size_t n = tris.size();
       before[g] = n;
       const std::size_t target = std::size_t(std::ceil(double(n) * share));
@@ -624,12 +625,7 @@ void run_rounds(Shared& s, Lane& lane, Block* b, int rounds = 255, bool top = fa
         continue;
       }
       progress = true;
-      const std::uint32_t first = std::uint32_t(h.triangles.size());
       add_group(s, members[g], result[g], b, &next);
-      SimplifiedGroup& made = result[g].simplified;
-      if (!made.added_positions.empty())
-        b->held.push_back({first, std::uint32_t(h.triangles.size()), std::move(made.added_positions),
-                           std::move(made.added_normals), std::move(made.added_colors)});
     }
     if (!lane.holds_placed) {
       s.simplified += b->simplified;

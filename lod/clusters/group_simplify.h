@@ -53,7 +53,6 @@ struct SimplifiedGroup {
 class CollapseSequence {
  public:
   std::size_t steps() const { return to_.size(); }
-  std::size_t triangles_before() const { return triangles_.size(); }
   // Live triangles after the first `step` collapses.
   std::size_t triangles_at(std::size_t step) const { return step == 0 ? triangles_.size() : live_[step - 1]; }
   // The most steps that leave at least `triangles`.
@@ -68,7 +67,8 @@ class CollapseSequence {
   std::vector<std::int32_t> global_;           // local vertex -> mesh vertex
   std::vector<double> origin_;                 // each local vertex's point, dim_ each
   // Per collapse: `from` went onto `to`, which moved to dim_ values of
-  // `at_` (position in units of 1 / scale, then colour), leaving live_.
+  // `at_` (position in units of 1 / scale, then normal and colour where
+  // weighted), leaving live_.
   std::vector<int> from_, to_;
   std::vector<double> at_;
   std::vector<std::uint32_t> live_;
