@@ -42,7 +42,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }
 
 std::vector<LevelRequest> requests_from(const std::vector<double>& percents, const std::vector<long long>& budgets,
-                                        bool at_most) {
+                                        bool at_most, bool stored_cuts) {
   std::vector<LevelRequest> requests;
   for (double p : percents) {
     if (!(p > 0 && p <= 100)) throw InputError("", "--levels takes percentages in (0, 100], got " + std::to_string(p));
@@ -52,6 +52,7 @@ std::vector<LevelRequest> requests_from(const std::vector<double>& percents, con
     if (t < 1) throw InputError("", "--triangles takes budgets >= 1, got " + std::to_string(t));
     requests.push_back(at_most ? LevelRequest::at_most_triangles(t) : LevelRequest::at_triangles(t));
   }
+  for (LevelRequest& r : requests) r.refine = !stored_cuts;
   return requests;
 }
 
@@ -163,7 +164,7 @@ void add_export_command(CLI::App& app) {
     std::vector<long long> budgets;
     double pixel_error = 1;
     int height = 1080;
-    bool no_quantize = false, json = false, at_most = false, no_meshopt = false;
+    bool no_quantize = false, json = false, at_most = false, no_meshopt = false, stored_cuts = false;
     long long tile_triangles = 16384;
   };
   auto args = std::make_shared<Args>();
@@ -184,6 +185,9 @@ void add_export_command(CLI::App& app) {
                                          "10 % (as extract --triangles)")
                              ->delimiter(',');
   cmd->add_flag("--at-most", args->at_most, "With --triangles: no level over its budget")->needs(budgets);
+  cmd->add_flag("--stored-cuts", args->stored_cuts,
+                "Clusters: each level the stored cut its count gets, not refined to the count (as extract "
+                "--stored-cut)");
   levels->excludes(budgets);
   cmd->add_option("--format", args->format,
                   "glb, gltf, ply, obj, off, stl or vtp (default: -o's extension), or 3dtiles (-o names a folder: "
@@ -232,7 +236,7 @@ void add_export_command(CLI::App& app) {
     if (default_levels) args->percents = {100, 25, 5, 1};
     args->percents = without_repeats(args->percents, "--levels", warnings);
     args->budgets = without_repeats(args->budgets, "--triangles", warnings);
-    const std::vector<LevelRequest> requests = requests_from(args->percents, args->budgets, args->at_most);
+    const std::vector<LevelRequest> requests = requests_from(args->percents, args->budgets, args->at_most, args->stored_cuts);
     if (!(args->pixel_error > 0) || args->height < 1)
       throw InputError("", "--pixel-error must be > 0 and --height >= 1");
     std::string format = args->format;

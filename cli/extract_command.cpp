@@ -59,7 +59,7 @@ void add_extract_command(CLI::App& app) {
     double percent = 0, error = 0, fov = 45, pixel_error = 1;
     long long triangles = 0, priority = 0;
     int height = 1080;
-    bool json = false, no_quantize = false, at_most = false;
+    bool json = false, no_quantize = false, at_most = false, stored_cut = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("extract", "One level of detail of a .mco model -> mesh");
@@ -76,9 +76,12 @@ void add_extract_command(CLI::App& app) {
   CLI::Option* triangles =
       cmd->add_option("--triangles", args->triangles,
                       "A level within 10 % of T triangles: the finest with at most T, or, where that falls more than "
-                      "10 % short, the next when it has at most 10 % more");
+                      "10 % short, the next when it has at most 10 % more. Clusters: a stored cut of at most 1.25 T "
+                      "refined to T by edge collapse where one has more than T");
   CLI::Option* at_most = cmd->add_flag("--at-most", args->at_most, "With --triangles: never more than T triangles");
   at_most->needs(triangles);
+  cmd->add_flag("--stored-cut", args->stored_cut,
+                "Clusters, with --percent or --triangles: the stored cut the count gets, not refined to it");
   CLI::Option* error = cmd->add_option("--error", args->error,
                                        "Clusters: the cut at this object-space error (model units)");
   CLI::Option* camera = cmd->add_option("--camera", args->camera,
@@ -98,7 +101,7 @@ void add_extract_command(CLI::App& app) {
       cmd->add_option("--priority", args->priority, "Octree: the level after N expansions (0: the root's mesh)");
   cmd->add_flag("--json", args->json,
                 "Print {\"structure\", \"triangles\", \"vertices\", \"clusters\", \"priority\", \"error\", "
-                "\"select_seconds\", \"extract_seconds\"} as JSON, with \"warnings\" when there are any and "
+                "\"select_seconds\", \"extract_seconds\"} as JSON, with \"refined_from\" when the cut was refined to the count, \"warnings\" when there are any and "
                 "\"read\" {\"pages\", \"bytes\", \"file_bytes\"} when the cut was read page by page");
   cmd->callback([args, percent, triangles, error, camera, priority, camera_flags] {
     for (const CLI::Option* flag : camera_flags)
@@ -115,6 +118,7 @@ void add_extract_command(CLI::App& app) {
     if (percent->count()) choice.percent = args->percent;
     if (triangles->count()) choice.triangles = args->triangles;
     choice.at_most = args->at_most;
+    choice.stored_cut = args->stored_cut;
     if (error->count()) choice.error = args->error;
     if (priority->count()) choice.priority = args->priority;
     if (camera->count()) {
@@ -163,6 +167,7 @@ void add_extract_command(CLI::App& app) {
       if (structure == LodStructure::kClusters) {
         j["clusters"] = cut.clusters;
         j["error"] = cut.error;
+        if (cut.refined_from > 0) j["refined_from"] = cut.refined_from;
       } else {
         j["priority"] = cut.priority;
       }
@@ -182,6 +187,9 @@ void add_extract_command(CLI::App& app) {
                   "extracted in %.2f ms -> %s\n",
                   cut.clusters, mesh.triangles.size(), cut.percent, mesh.positions.size(), cut.error,
                   cut.select_seconds * 1e3, (cut.extract_seconds + compact_seconds) * 1e3, args->output.c_str());
+      if (cut.refined_from > 0)
+        say("refined by edge collapse from a stored cut of %zu triangles (--stored-cut: that cut as it is)\n",
+            cut.refined_from);
       if (model.clusters->paged) {
         const PageStats& read = model.clusters->paged->stats();
         say("read %llu pages page by page: %.1f of the model's %.1f MB\n", (unsigned long long)read.pages_read,

@@ -58,8 +58,13 @@ LevelRequest level_request(const LevelChoice& c, OptionSpelling spelling) {
                              std::to_string(given));
   }
   check_ranges(c, spelling);
-  if (c.percent) return LevelRequest::at_percent(*c.percent);
-  if (c.triangles) return c.at_most ? LevelRequest::at_most_triangles(*c.triangles) : LevelRequest::at_triangles(*c.triangles);
+  if (c.percent || c.triangles) {
+    LevelRequest r = c.percent      ? LevelRequest::at_percent(*c.percent)
+                     : c.at_most    ? LevelRequest::at_most_triangles(*c.triangles)
+                                    : LevelRequest::at_triangles(*c.triangles);
+    r.refine = !c.stored_cut;
+    return r;
+  }
   if (c.error) return LevelRequest::at_error(*c.error);
   if (c.priority) return LevelRequest::at_priority(std::size_t(*c.priority));
   return LevelRequest::for_camera(*c.camera, c.pixel_error);

@@ -18,6 +18,7 @@ struct LevelChoice {
   std::optional<double> percent;          // 0 to 100
   std::optional<std::int64_t> triangles;  // >= 0
   bool at_most = false;                   // with triangles: never more than it
+  bool stored_cut = false;                // with percent or triangles: a stored cut, not refined to the count
   std::optional<double> error;            // finite, >= 0
   std::optional<CameraView> camera;       // eye, target and up; fov_degrees and height too
   double pixel_error = 1;                 // > 0; with a camera

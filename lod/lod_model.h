@@ -83,6 +83,10 @@ struct LevelRequest {
   // level with at most this many.
   std::int64_t triangles = 0;
   bool strict = false;
+  // Cluster hierarchy, by percent or triangles: a finer stored cut refined to
+  // the count by edge collapse where one is near (lod/clusters/cut_refinement.h);
+  // false gives the stored cut as it is.
+  bool refine = true;
   double error = 0;              // object-space error, in the model's units (clusters only)
   CameraView camera;             // with pixel_error (clusters only)
   double pixel_error = 1;
@@ -106,6 +110,7 @@ struct LevelCut {
   std::size_t priority = 0;      // expansions (octree)
   double error = 0;              // the uniform threshold (cluster hierarchy; camera: 0)
   double percent = 100;          // of the structure's full detail (triangles for clusters)
+  std::size_t refined_from = 0;  // the stored cut's triangles, when refined to the count; else 0
   double select_seconds = 0;     // choosing the cut
   double extract_seconds = 0;    // choosing and writing the index buffer
 };

@@ -46,10 +46,11 @@ CameraView camera_of(const py::handle& camera, double fov, int height) {
 py::object extract(const Model& self, std::optional<std::int64_t> triangles, std::optional<double> percent,
                    std::optional<double> error, const py::object& camera, double pixel_error,
                    std::optional<std::string> structure, double fov, int height, bool at_most,
-                   std::optional<std::int64_t> priority) {
+                   std::optional<std::int64_t> priority, bool stored_cut) {
   LevelChoice choice;
   choice.triangles = triangles;
   choice.at_most = at_most;
+  choice.stored_cut = stored_cut;
   choice.percent = percent;
   choice.error = error;
   choice.priority = priority;
@@ -156,16 +157,18 @@ the prioritized marching-cube octree (Lee, *Efficient LOD Model Generation of
       .def("extract", &extract, py::arg("triangles") = py::none(), py::arg("percent") = py::none(),
            py::arg("error") = py::none(), py::arg("camera") = py::none(), py::arg("pixel_error") = 1.0,
            py::arg("structure") = py::none(), py::kw_only(), py::arg("fov") = 45.0, py::arg("height") = 1080,
-           py::arg("at_most") = false, py::arg("priority") = py::none(),
+           py::arg("at_most") = false, py::arg("priority") = py::none(), py::arg("stored_cut") = false,
            R"doc(
-extract(triangles=None, percent=None, error=None, camera=None, pixel_error=1.0, structure=None, *, fov=45, height=1080, at_most=False, priority=None) -> Mesh
+extract(triangles=None, percent=None, error=None, camera=None, pixel_error=1.0, structure=None, *, fov=45, height=1080, at_most=False, priority=None, stored_cut=False) -> Mesh
 
 One level, as `scan2lod extract` takes it: exactly one of a triangle budget
 (met within 10 %; at_most: never over it), a percent, an object-space error,
 a camera (eye, target, up) seen with a vertical fov in degrees on a viewport
 `height` pixels high whose error is at most `pixel_error` pixels, or an
 octree priority. `structure` is "clusters" or "octree" (default: the
-clusters when the model has them).
+clusters when the model has them). The clusters serve a count from a stored
+cut of at most 1.25 times it, refined to it by edge collapse; stored_cut
+gives the stored cut as it is.
 )doc")
       .def(
           "save",

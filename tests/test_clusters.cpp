@@ -4,6 +4,8 @@
 // is, and the generalized quadrics keep colours. Real scans (the bundled
 // bunny) and shapes with known answers (a scanned sphere).
 #include <scan2lod/acquisition/load_inputs.h>
+#include <scan2lod/lod/clusters/cut_refinement.h>
+#include <scan2lod/lod/level_budget.h>
 #include <scan2lod/lod/lod_model.h>
 #include <scan2lod/measure/surface_distance.h>
 #include <scan2lod/measure/topology.h>
@@ -87,9 +89,11 @@ TEST(ClusterHierarchy, EveryUniformCutIsAsSoundAsTheFullMesh) {
   const MeshTopology full = mesh_topology(b.mesh);
   LevelExtractor extractor(b.model, LodStructure::kClusters);
   const ClusterCutTable table = cluster_cut_table(*b.model.clusters);
-  for (std::int64_t count : table.triangles)
-    ASSERT_EQ(std::int64_t(extractor.extract(LevelRequest::at_most_triangles(count)).triangles.size()), count)
-        << "the table counts what the cut emits";
+  for (std::int64_t count : table.triangles) {
+    LevelRequest stored = LevelRequest::at_most_triangles(count);
+    stored.refine = false;
+    ASSERT_EQ(std::int64_t(extractor.extract(stored).triangles.size()), count) << "the table counts what the cut emits";
+  }
   int checked = 0;
   for (const LevelRequest& request : testing::every_uniform_cut(*b.model.clusters)) {
     const LevelCut& cut = extractor.extract(request);
@@ -132,12 +136,16 @@ TEST(ClusterHierarchy, VerticesAtTheQuadricMinimumMakeCloserCuts) {
 // (lod/level_budget.h; the octree's side: OctreeSoundness.*).
 TEST(ClusterHierarchy, BudgetsGiveTheFinestCutThatFitsOrOneWithinTenPercent) {
   const Built& b = bunny128();
-  for (const LodStructure structure : {LodStructure::kClusters}) {
+  // Refined to the count or not (lod/clusters/cut_refinement.h), the same rules hold.
+  for (const bool refine : {true, false}) {
+    const LodStructure structure = LodStructure::kClusters;
     LevelExtractor extractor(b.model, structure);
     std::int64_t last = 0, last_strict = 0, over = 0;
     for (std::int64_t budget : {500, 1000, 2000, 3000, 5000, 7000, 10000, 20000, 50000}) {
-      const std::int64_t strict = std::int64_t(extractor.extract(LevelRequest::at_most_triangles(budget)).triangles.size());
-      const std::int64_t got = std::int64_t(extractor.extract(LevelRequest::at_triangles(budget)).triangles.size());
+      LevelRequest at_most = LevelRequest::at_most_triangles(budget), within = LevelRequest::at_triangles(budget);
+      at_most.refine = within.refine = refine;
+      const std::int64_t strict = std::int64_t(extractor.extract(at_most).triangles.size());
+      const std::int64_t got = std::int64_t(extractor.extract(within).triangles.size());
       EXPECT_LE(strict, std::max<std::int64_t>(budget, extractor.coarsest_triangles())) << budget;
       EXPECT_TRUE(got == strict || (10 * strict < 9 * budget && got > budget && 10 * got <= 11 * budget))
           << structure_name(structure) << ", budget " << budget << ": " << got << " (at most: " << strict << ")";
@@ -145,7 +153,7 @@ TEST(ClusterHierarchy, BudgetsGiveTheFinestCutThatFitsOrOneWithinTenPercent) {
       EXPECT_GE(got, last) << "larger budgets never get fewer triangles";
       last = got, last_strict = strict, over += got > budget;
     }
-    std::printf("%s: %lld of 9 budgets took the level just over\n", structure_name(structure), (long long)over);
+    std::printf("%s: %lld of 9 budgets took the level just over\n", refine ? "refined" : "stored", (long long)over);
   }
 }
 
@@ -269,6 +277,95 @@ TEST(ClusterHierarchy, ColoursInTheQuadricsKeepColourBands) {
   double worst = 0;
   for (const Vec3f& p : m.positions) worst = std::max(worst, std::abs(double(p.norm()) - 1.0));
   EXPECT_LT(worst, 0.02);
+}
+
+// A count between two stored cuts is served from a finer one refined to it
+// by half-edge collapse (lod/clusters/cut_refinement.h): exactly the count,
+// as sound as the full mesh, over the model's own vertices.
+TEST(CutRefinement, CountsBetweenStoredCutsGetThemExactlyOverTheModelsVertices) {
+  const Built& b = bunny128();
+  const MeshTopology full = mesh_topology(b.mesh);
+  LevelExtractor extractor(b.model, LodStructure::kClusters);
+  const ClusterCutTable table = cluster_cut_table(*b.model.clusters);
+  int refined = 0;
+  for (std::int64_t budget : {1500, 2500, 4000, 7000, 12000, 25000, 45000, 70000}) {
+    const float finer = rank_to_refine(table, budget);
+    const LevelCut& cut = extractor.extract(LevelRequest::at_triangles(budget));
+    if (finer < 0) {
+      EXPECT_EQ(cut.refined_from, 0u) << budget;
+      continue;
+    }
+    ++refined;
+    const std::int64_t from = std::int64_t(cut.refined_from), got = std::int64_t(cut.triangles.size());
+    EXPECT_GT(from, budget);
+    EXPECT_LE(got, budget);
+    EXPECT_GE(got, budget - 4) << "collapses take two triangles at a time";
+    for (const Triangle& t : cut.triangles)
+      for (std::int32_t v : t) ASSERT_LT(std::size_t(v), b.model.vertices.size());
+    const MeshTopology t = mesh_topology(level_mesh(b.model, cut.triangles));
+    EXPECT_EQ(t.non_manifold_edges, 0u) << budget;
+    EXPECT_EQ(t.degenerate_triangles, 0u) << budget;
+    EXPECT_LE(t.boundary_loops, full.boundary_loops) << budget;
+    EXPECT_LE(t.components, full.components) << budget;
+    // The levels a view colours follow the triangles that stayed.
+    EXPECT_EQ(extractor.triangle_levels().size(), cut.triangles.size());
+    // The stored cut, as the budget rules give it, unrefined; from further
+    // than the headroom only where that one misses the budget.
+    LevelRequest stored = LevelRequest::at_triangles(budget);
+    stored.refine = false;
+    const LevelCut& plain = extractor.extract(stored);
+    EXPECT_EQ(plain.refined_from, 0u);
+    if (double(from) > kRefineHeadroom * double(budget))
+      EXPECT_FALSE(meets_budget(std::int64_t(plain.triangles.size()), budget)) << budget << " from " << from;
+  }
+  EXPECT_GE(refined, 5);
+}
+
+// The point of refining: a stored cut between two levels mixes them, and
+// its error is the mix of theirs; collapsing a finer cut to the count comes
+// closer to the full mesh.
+TEST(CutRefinement, RefinedCutsAreCloserThanTheStoredCutsTheyReplace) {
+  const Built& b = bunny128();
+  LevelExtractor extractor(b.model, LodStructure::kClusters);
+  auto error = [&](const LevelRequest& r) {
+    const TriangleMesh cut = compact_level(b.model, extractor.extract(r).triangles);
+    const SurfaceComparison c = compare_surfaces(cut, b.mesh, CompareOptions{100000, 1});
+    return (c.a_to_b.mean + c.b_to_a.mean) / c.diagonal;
+  };
+  double refined_sum = 0, stored_sum = 0;
+  for (std::int64_t budget : {4000, 12000, 25000, 45000, 70000}) {
+    LevelRequest stored = LevelRequest::at_triangles(budget);
+    stored.refine = false;
+    const double r = error(LevelRequest::at_triangles(budget)), s = error(stored);
+    std::printf("%lld triangles: refined %.3g, stored %.3g (%.2fx)\n", (long long)budget, r, s, r / s);
+    EXPECT_LT(r, 1.1 * s) << budget;
+    refined_sum += r, stored_sum += s;
+  }
+  EXPECT_LT(refined_sum, 0.95 * stored_sum);
+}
+
+// A sphere stays a sphere: one piece, closed, Euler characteristic 2.
+TEST(CutRefinement, ARefinedSphereIsStillASphere) {
+  const TriangleMesh& full = banded_sphere();
+  LodModel model;
+  add_cluster_hierarchy(&model, full, false);
+  LevelExtractor extractor(model, LodStructure::kClusters);
+  int refined = 0;
+  for (std::int64_t budget : {1200, 2000, 3500, 6000, 10000}) {
+    const LevelCut& cut = extractor.extract(LevelRequest::at_triangles(budget));
+    if (cut.refined_from == 0) continue;
+    ++refined;
+    const MeshTopology t = mesh_topology(level_mesh(model, cut.triangles));
+    EXPECT_EQ(t.components, 1u) << budget;
+    EXPECT_EQ(t.boundary_edges, 0u) << budget;
+    EXPECT_EQ(t.non_manifold_edges, 0u) << budget;
+    EXPECT_EQ(t.euler_characteristic, 2) << budget;
+    const TriangleMesh m = compact_level(model, cut.triangles);
+    double worst = 0;
+    for (const Vec3f& p : m.positions) worst = std::max(worst, std::abs(double(p.norm()) - 1.0));
+    EXPECT_LT(worst, 0.02) << budget;
+  }
+  EXPECT_GE(refined, 2);
 }
 
 }  // namespace

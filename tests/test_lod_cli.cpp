@@ -211,10 +211,23 @@ TEST(LodCli, ClusterCutsByBudgetErrorAndCamera) {
   EXPECT_EQ(all.at("triangles").get<std::size_t>(), full);
   for (const char* key : {"clusters", "select_seconds", "extract_seconds", "error"})
     EXPECT_TRUE(all.contains(key)) << key;
-  const nlohmann::json budget = extract("--triangles 2000");
+  const nlohmann::json budget = extract("--triangles 2000 --stored-cut");
   EXPECT_LE(budget.at("triangles").get<std::size_t>(), 2000u);
   EXPECT_GT(budget.at("triangles").get<std::size_t>(), 200u);
-  // The budget's error threshold gives the same cut by --error.
+  EXPECT_FALSE(budget.contains("refined_from"));
+  // Without --stored-cut, a count with a finer stored cut near it is refined
+  // to it (which cut: CutRefinement.*).
+  int refined = 0;
+  for (int t : {1500, 2000, 3000, 4500, 7000}) {
+    const nlohmann::json r = extract("--triangles " + std::to_string(t));
+    if (!r.contains("refined_from")) continue;
+    ++refined;
+    EXPECT_LE(r.at("triangles").get<int>(), t);
+    EXPECT_GE(r.at("triangles").get<int>(), t - 4);
+    EXPECT_GT(r.at("refined_from").get<int>(), t);
+  }
+  EXPECT_GE(refined, 2);
+  // The stored cut's error threshold gives the same cut by --error.
   char threshold[32];
   std::snprintf(threshold, sizeof threshold, "%.9g", budget.at("error").get<double>() * (1 + 1e-6));
   const nlohmann::json by_error = extract(std::string("--error ") + threshold);

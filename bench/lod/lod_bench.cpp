@@ -547,6 +547,12 @@ struct ClusterLevel {
   std::int64_t octree_triangles = 0;
   TriangleMesh octree_mesh;
   std::optional<SurfaceComparison> octree_fidelity;
+  // Where the cut was refined to the count (LevelCut::refined_from), the
+  // stored cut the budget gets unrefined (LevelRequest::refine = false).
+  std::int64_t refined_from = 0;
+  std::int64_t stored_triangles = 0;
+  TriangleMesh stored_mesh;
+  std::optional<SurfaceComparison> stored_fidelity;
   std::vector<PeerCase> peers;  // empty at full detail and for a budget the full mesh is under
 
   std::string label() const { return budget == 0 ? "100 %" : format("%lldk", (long long)(budget / 1000)); }
@@ -1124,6 +1130,21 @@ void report_clusters(Report& r, const RunInfo& info, const std::vector<ClusterLe
     for (const PeerCase& c : l.peers) r.add(" %s |", cluster_peer_cell(c, l.triangles).c_str());
     r.add("\n");
   }
+  r.add("\nCuts refined to the count (lod/clusters/cut_refinement.h: a stored cut of at most 1.25x the budget, "
+        "collapsed to it), against the stored cut the budget gets without refining (`LevelRequest::refine = false`): "
+        "error in 1e-3 of the diagonal; most faithful peer at the refined cut's count.\n\n"
+        "| budget | refined from | cut triangles | refined cut | stored cut triangles | stored cut | stored / most faithful peer |\n"
+        "|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const ClusterLevel& l : levels) {
+    if (l.refined_from == 0 || !l.fidelity || !l.stored_fidelity) continue;
+    const PeerCase* best = nullptr;
+    for (const PeerCase& c : l.peers)
+      if (c.fidelity && (!best || error_1e3(*c.fidelity) < error_1e3(*best->fidelity))) best = &c;
+    r.add("| %s | %lld | %lld | %s | %lld | %s | %s |\n", l.label().c_str(), (long long)l.refined_from,
+          (long long)l.triangles, error_text(error_1e3(*l.fidelity)).c_str(), (long long)l.stored_triangles,
+          error_text(error_1e3(*l.stored_fidelity)).c_str(),
+          best && error_1e3(*best->fidelity) > 0 ? ratio_text(error_1e3(*l.stored_fidelity) / error_1e3(*best->fidelity)).c_str() : "—");
+  }
   r.add("\nTopology and tails of the cuts (`mesh_topology` on the index buffer; p95 / max: the larger direction's, "
         "1e-3 diag):\n\n");
   r.add("| budget | cut triangles | vertices | boundary loops | non-manifold edges | components | p95 / max |\n"
@@ -1398,8 +1419,16 @@ int main(int argc, char** argv) {
       l.triangles = std::int64_t(cut.triangles.size());
       l.clusters = cut.clusters;
       l.threshold = cut.error;
+      l.refined_from = std::int64_t(cut.refined_from);
       l.mesh = compact_level(model, cut.triangles);
       l.topology = mesh_topology(l.mesh);
+      if (l.refined_from > 0) {
+        LevelRequest stored = cluster_request(l);
+        stored.refine = false;
+        const LevelCut& s_cut = clusters.extract(stored);
+        l.stored_triangles = std::int64_t(s_cut.triangles.size());
+        l.stored_mesh = compact_level(model, s_cut.triangles);
+      }
       if (b != 0) {
         const int threads = omp_get_max_threads();
         omp_set_num_threads(1);  // extract_lod: no OpenMP team in the parent
@@ -1564,6 +1593,7 @@ int main(int argc, char** argv) {
     try {
       l.fidelity = compare_surfaces(l.mesh, full, compare);
       l.octree_fidelity = compare_surfaces(l.octree_mesh, full, compare);
+      if (l.refined_from > 0) l.stored_fidelity = compare_surfaces(l.stored_mesh, full, compare);
     } catch (const std::exception& e) {
       l.measure_error = e.what();
     }

@@ -391,7 +391,9 @@ ClusterResult check_clusters(const LodModel& model, const MeshTopology& octree_f
 
   const bool small = h.full_triangles < kSmallMesh;
   for (std::size_t i = 0; i < table.ranks.size(); ++i) {
-    const LevelCut& cut = extractor.extract(LevelRequest::at_most_triangles(table.triangles[i]));
+    LevelRequest stored = LevelRequest::at_most_triangles(table.triangles[i]);
+    stored.refine = false;  // every stored cut itself
+    const LevelCut& cut = extractor.extract(stored);
     const MeshTopology t = measure(cut);
     const bool judged = small || table.triangles[i] >= kJudgedCutTriangles;
     std::printf("cut %zu rank=%.6g tris=%zu table=%lld clusters=%zu loops=%zu bedges=%zu nm=%zu degen=%zu comps=%zu "

@@ -2,7 +2,6 @@
 
 #include <scan2lod/core/error.h>
 #include <scan2lod/core/morton.h>
-#include <scan2lod/core/sort_on_cores.h>
 #include <scan2lod/distributed/message.h>
 #include <scan2lod/distributed/work_sharing.h>
 #include <scan2lod/lod/clusters/cluster_partition.h>
@@ -11,6 +10,7 @@
 #include <scan2lod/lod/clusters/group_vertices.h>
 #include <scan2lod/lod/clusters/hierarchy_ranks.h>
 #include <scan2lod/lod/clusters/paged_model.h>
+#include <scan2lod/lod/clusters/position_weld.h>
 #include <scan2lod/lod/clusters/triangle_spool.h>
 
 #include <scan2lod/lod/clusters/meshlet_builder.h>
@@ -50,26 +50,6 @@ struct Sphere {
   Vec3f center = Vec3f::Zero();
   float radius = 0;
 };
-
-// Phase 1: one id per position (the smallest vertex index there), so that
-// split attributes do not split adjacency or locks.
-std::vector<std::int32_t> weld_positions(ArrayView<Vec3f> positions, int threads) {
-  std::vector<std::int32_t> order(positions.size()), weld(positions.size());
-  std::iota(order.begin(), order.end(), 0);
-  auto less = [&](std::int32_t a, std::int32_t b) {
-    const Vec3f &p = positions[std::size_t(a)], &q = positions[std::size_t(b)];
-    if (p.x() != q.x()) return p.x() < q.x();
-    if (p.y() != q.y()) return p.y() < q.y();
-    if (p.z() != q.z()) return p.z() < q.z();
-    return a < b;
-  };
-  sort_on_cores(order.begin(), order.end(), threads, less);
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    const bool same = i > 0 && positions[std::size_t(order[i])] == positions[std::size_t(order[i - 1])];
-    weld[std::size_t(order[i])] = same ? weld[std::size_t(order[i - 1])] : order[i];
-  }
-  return weld;
-}
 
 // The smallest-ish sphere (box centre) around some points.
 Sphere points_sphere(const JoinedView<Vec3f>& positions, const Triangle* tris, std::size_t count) {
@@ -1211,7 +1191,7 @@ void prepare(Shared& s, Lane& main, ArrayView<Vec3f> positions, ArrayView<Vec3f>
   s.positions = JoinedView<Vec3f>(positions, &s.added_positions);
   s.options = &options;
   s.threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  s.weld = weld_positions(positions, s.threads);
+  s.weld = weld_positions(positions, s.threads);  // phase 1
   const float diagonal = bounds(positions).diagonal();
   s.input.positions = s.positions;
   s.input.normals = JoinedView<Vec3f>(normals, &s.added_normals);

@@ -4,6 +4,8 @@
 // of it, and adding one to a model.
 #include <scan2lod/core/error.h>
 #include <scan2lod/lod/clusters/cluster_sections.h>
+#include <scan2lod/lod/clusters/cut_refinement.h>
+#include <scan2lod/lod/level_budget.h>
 #include <scan2lod/lod/structure.h>
 
 #include <algorithm>
@@ -99,23 +101,19 @@ namespace {
 
 class ClusterLevels final : public StructureLevels {
  public:
-  explicit ClusterLevels(const ClusterHierarchy& h) : h_(h), table_(cluster_cut_table(h)) {}
+  explicit ClusterLevels(const LodModel& model) : model_(model), h_(*model.clusters), table_(cluster_cut_table(h_)) {}
 
   void select(const LevelRequest& request, LevelCut* cut) override {
     using Kind = LevelRequest::Kind;
+    refine_to_ = -1;
     switch (request.kind) {
       case Kind::kPercent: {
         const double share = std::clamp(request.percent, 0.0, 100.0) / 100.0;
-        select_clusters_by_rank(h_, rank_for_triangles(table_, std::int64_t(std::floor(share * double(h_.full_triangles)))),
-                                &selected_);
-        cut->error = cut_error(h_, selected_);
+        select_by_count(std::int64_t(std::floor(share * double(h_.full_triangles))), true, request.refine, cut);
         break;
       }
       case Kind::kTriangles:
-        select_clusters_by_rank(h_, request.strict ? rank_for_triangles(table_, request.triangles)
-                                                   : rank_for_budget(table_, request.triangles),
-                                &selected_);
-        cut->error = cut_error(h_, selected_);
+        select_by_count(request.triangles, request.strict, request.refine, cut);
         break;
       case Kind::kError:
         cut->error = request.error;
@@ -130,8 +128,28 @@ class ClusterLevels final : public StructureLevels {
     }
   }
   void emit(LevelCut* cut) override {
+    kept_.clear();
     emit_clusters(h_, selected_, &cut->triangles);
     cut->clusters = selected_.size();
+    cut->refined_from = 0;
+    if (refine_to_ >= 0) {
+      const std::size_t stored = cut->triangles.size();
+      const CutRefiner::Result r = refine(&cut->triangles);
+      // A refinement that stalled over the budget (handles edge collapse
+      // cannot remove) is no better than the stored cut.
+      if (r.refined && std::int64_t(cut->triangles.size()) <= ceiling_) {
+        cut->refined_from = stored;
+        cut->error += r.error;  // deviations add up (the triangle inequality)
+      } else {
+        // The stored cut the count would get unrefined.
+        kept_.clear();
+        select_clusters_by_rank(h_, fallback_rank_, &selected_);
+        cut->triangles.clear();
+        emit_clusters(h_, selected_, &cut->triangles);
+        cut->clusters = selected_.size();
+        cut->error = cut_error(h_, selected_);
+      }
+    }
     cut->percent = h_.full_triangles ? 100.0 * double(cut->triangles.size()) / double(h_.full_triangles) : 100.0;
   }
   std::int64_t full_triangles() const override { return h_.full_triangles; }
@@ -143,19 +161,54 @@ class ClusterLevels final : public StructureLevels {
   // Per triangle, its cluster's DAG level (0 at full detail).
   std::vector<std::uint8_t> triangle_levels(const LevelCut& cut) const override {
     std::vector<std::uint8_t> out;
-    out.reserve(cut.triangles.size());
+    out.reserve(kept_.empty() ? cut.triangles.size() : 0);
     for (std::int32_t c : selected_) {
       const Cluster& cl = h_.clusters[std::size_t(c)];
       out.insert(out.end(), cl.triangle_count, cl.level);
     }
-    return out;
+    if (kept_.empty()) return out;
+    std::vector<std::uint8_t> refined(kept_.size());
+    for (std::size_t i = 0; i < kept_.size(); ++i) refined[i] = out[kept_[i]];
+    return refined;
   }
 
  private:
+  // A cut by count: a finer stored cut refined to the count where one lies
+  // close enough (lod/clusters/cut_refinement.h), else the stored cut the
+  // budget rules give (lod/level_budget.h).
+  void select_by_count(std::int64_t budget, bool strict, bool refine, LevelCut* cut) {
+    const float stored = strict ? rank_for_triangles(table_, budget) : rank_for_budget(table_, budget);
+    const float finer = refine ? rank_to_refine(table_, budget) : -1.f;
+    if (finer >= 0) {
+      refine_to_ = budget;
+      ceiling_ = budget_ceiling(budget, strict);
+      fallback_rank_ = stored;
+    }
+    select_clusters_by_rank(h_, finer >= 0 ? finer : stored, &selected_);
+    cut->error = cut_error(h_, selected_);
+  }
+
+  // The emitted cut refined to refine_to_, over the model's vertices or, for
+  // a model read page by page, the pages' (then numbered as the model's).
+  CutRefiner::Result refine(std::vector<Triangle>* triangles) {
+    const std::size_t target = std::size_t(refine_to_);
+    if (!h_.paged) {
+      const VertexArray& v = model_.vertices;
+      return refiner_.refine({v.positions, v.normals, v.colors}, triangles, target, &kept_);
+    }
+    return refiner_.refine_pages(*h_.paged, triangles, target, &kept_);
+  }
+
+  const LodModel& model_;
   const ClusterHierarchy& h_;
   ClusterCutTable table_;
   std::vector<float> projected_;
   std::vector<std::int32_t> selected_;
+  CutRefiner refiner_;
+  std::int64_t refine_to_ = -1;   // the count the selected cut is refined to; -1: not refined
+  std::int64_t ceiling_ = 0;      // the most triangles the refined cut may keep
+  float fallback_rank_ = -1;      // the stored cut's, should the refinement stall above that
+  std::vector<std::uint32_t> kept_;  // per triangle of a refined cut, which it was
 };
 
 StructureInfo cluster_info(const LodModel& model, const std::vector<double>& percents) {
@@ -208,7 +261,7 @@ const StructureKind& cluster_structure() {
       3,
       [](const LodModel& model) { return model.clusters.has_value(); },
       [](const LodModel& model) -> std::unique_ptr<StructureLevels> {
-        return std::make_unique<ClusterLevels>(*model.clusters);
+        return std::make_unique<ClusterLevels>(model);
       },
       []() -> std::unique_ptr<StructureSections> { return std::make_unique<ClusterSections>(); },
       cluster_info,

@@ -362,7 +362,8 @@ std::vector<std::int32_t> load_group(const std::vector<Triangle>& triangles, con
   g.locked.assign(nv, 0);
   g.border.assign(nv, 0);
   g.mark.assign(nv, 0);
-  for (std::size_t v = 0; v < nv; ++v) g.locked[v] = (*in.locked)[std::size_t(global[v])];
+  if (in.locked)
+    for (std::size_t v = 0; v < nv; ++v) g.locked[v] = (*in.locked)[std::size_t(global[v])];
   classify(&g);
 
   return global;
@@ -631,9 +632,11 @@ SimplifiedGroup CollapseSequence::take(std::size_t step, const SimplifyInput& in
   SimplifiedGroup out;
   std::vector<std::array<int, 3>> live;
   live.reserve(triangles_at(step));
-  for (const auto& t : triangles_) {
+  out.kept.reserve(triangles_at(step));
+  for (std::size_t i = 0; i < triangles_.size(); ++i) {
+    const auto& t = triangles_[i];
     const std::array<int, 3> r{find(t[0]), find(t[1]), find(t[2])};
-    if (r[0] != r[1] && r[1] != r[2] && r[0] != r[2]) live.push_back(r);
+    if (r[0] != r[1] && r[1] != r[2] && r[0] != r[2]) live.push_back(r), out.kept.push_back(std::uint32_t(i));
   }
   std::vector<std::int32_t> id(global_.begin(), global_.end());
   out.triangles.reserve(live.size());

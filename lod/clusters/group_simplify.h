@@ -23,7 +23,8 @@ struct SimplifyInput {
   JoinedView<Vec3f> positions;
   JoinedView<Vec3f> normals;  // empty or one per position
   JoinedView<Rgb> colors;     // empty or one per position
-  // locked[v] != 0: v is shared with another group and must not move.
+  // locked[v] != 0: v is shared with another group and must not move
+  // (null: none is).
   const std::vector<std::uint8_t>* locked = nullptr;
   float scale = 1;           // 1 / the mesh's diagonal: quadrics see a unit-sized mesh
   float normal_weight = 0;   // see ClusterOptions
@@ -40,6 +41,8 @@ struct SimplifiedGroup {
   std::vector<Vec3f> added_positions;
   std::vector<Vec3f> added_normals;  // when the input has normals
   std::vector<Rgb> added_colors;     // when the input has colours
+  // Per triangle, which of the input's non-degenerate triangles it was.
+  std::vector<std::uint32_t> kept;
   // Measured, in the mesh's units: the largest distance from a removed or
   // moved vertex to the triangles around the vertex that stands for it, and
   // the mean of those distances.

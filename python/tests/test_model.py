@@ -11,10 +11,14 @@ from conftest import BUNNY, run_cli
 def test_a_triangle_budget_is_met_within_ten_percent(bunny_model):
     level = bunny_model.extract(triangles=5000)
     assert abs(len(level.triangles) - 5000) <= 500
-    # Never over the budget: the finest level under it, and a warning when
-    # that falls more than 10 % short (as `extract --at-most` says).
+    # A stored cut up to 1.25x the budget is refined to it: the budget, never
+    # over, with nothing to warn of.
+    refined = bunny_model.extract(triangles=5000, at_most=True)
+    assert 4996 <= len(refined.triangles) <= 5000
+    # The stored cuts alone: the finest under the budget, and a warning when
+    # that falls more than 10 % short (as `extract --at-most --stored-cut` says).
     with pytest.warns(UserWarning, match="within 10 % of 5000 triangles") as said:
-        strict = bunny_model.extract(triangles=5000, at_most=True)
+        strict = bunny_model.extract(triangles=5000, at_most=True, stored_cut=True)
     assert len(strict.triangles) <= 5000
     assert f"took the one with {len(strict.triangles)}" in str(said[0].message)
 
