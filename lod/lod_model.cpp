@@ -201,7 +201,9 @@ std::vector<LevelSummary> summarize_levels(const LodModel& model, LodStructure s
   std::vector<LevelSummary> out;
   std::vector<std::uint8_t> used(model.vertices.size(), 0);
   for (double percent : percents) {
-    const LevelCut& cut = extractor.extract(LevelRequest::at_percent(percent));
+    LevelRequest request = LevelRequest::at_percent(percent);
+    request.refine = false;  // what the structure stores, at no cost
+    const LevelCut& cut = extractor.extract(request);
     LevelSummary s;
     s.percent = percent;
     s.priority = cut.priority;

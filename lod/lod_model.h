@@ -180,8 +180,9 @@ struct ClusterSummary {
 OctreeSummary describe_octree(const LodModel& model);
 ClusterSummary describe_clusters(const LodModel& model);
 
-// A model's levels at the given percentages, for tables and plots: triangles
-// and distinct vertices of each.
+// A model's stored levels at the given percentages (cluster cuts not refined
+// to the count), for tables and plots: triangles and distinct vertices of
+// each.
 struct LevelSummary {
   double percent = 0;
   std::size_t priority = 0;    // octree

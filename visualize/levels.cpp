@@ -29,10 +29,16 @@ Level LevelSource::at(const LevelRequest& request) {
 }
 
 Level LevelSource::at_percent(double percent) {
-  return at(LevelRequest::at_percent(std::clamp(percent, 0.0, 100.0)));
+  LevelRequest r = LevelRequest::at_percent(std::clamp(percent, 0.0, 100.0));
+  r.refine = false;
+  return at(r);
 }
 
-Level LevelSource::at_triangles(std::int64_t triangles) { return at(LevelRequest::at_triangles(triangles)); }
+Level LevelSource::at_triangles(std::int64_t triangles) {
+  LevelRequest r = LevelRequest::at_triangles(triangles);
+  r.refine = false;
+  return at(r);
+}
 
 const LevelCut& LevelSource::cut(const LevelRequest& request) {
   using Kind = LevelRequest::Kind;

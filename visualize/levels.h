@@ -39,6 +39,8 @@ class LevelSource {
 
   // A compact level (LevelExtractor::extract, then compact_level).
   Level at(const LevelRequest& request);
+  // The stored level (for the clusters, not refined to the count: what the
+  // viewer's slider shows).
   Level at_percent(double percent);  // percent clamped to [0, 100]
   Level at_triangles(std::int64_t triangles);
 

@@ -514,8 +514,12 @@ void Viewer::Impl::set_slider_unit(bool by_triangles) {
 }
 
 LevelRequest Viewer::Impl::slider_request(double v) const {
-  return state.slider_by_triangles ? LevelRequest::at_triangles(std::int64_t(std::llround(v)))
-                                   : LevelRequest::at_percent(std::clamp(v, 0.0, 100.0));
+  LevelRequest r = state.slider_by_triangles ? LevelRequest::at_triangles(std::int64_t(std::llround(v)))
+                                             : LevelRequest::at_percent(std::clamp(v, 0.0, 100.0));
+  // The stored cuts, by reference: a slider asks at every move, and refining
+  // to the count takes about 3.5 us a triangle (lod/clusters/cut_refinement.h).
+  r.refine = false;
+  return r;
 }
 
 void Viewer::Impl::on_slider() {
