@@ -386,8 +386,10 @@ def summary(reconstruction_path, lod_path):
         out.append("")
     cluster_rows, cluster_line = cluster_section(lod)
     if cluster_rows:
-        out += ["The cluster hierarchy's uniform cuts at triangle budgets, against `meshopt_simplify` and the most "
-                "faithful peer at the cut's count (error as above):",
+        out += ["The cluster hierarchy's uniform cuts at triangle budgets (as `extract --triangles` gives them: a "
+                "stored cut up to 1.25x the budget refined to it by edge collapse), against `meshopt_simplify` and "
+                "the most faithful peer at the cut's count (error as above; the stored cuts alone: "
+                "`bench/lod/REPORT.md`):",
                 "",
                 "| budget | triangles | cluster cut error | meshopt_simplify | cut / meshopt_simplify "
                 "| most faithful peer | the cut's error against it |",
