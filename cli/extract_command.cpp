@@ -80,7 +80,7 @@ void add_extract_command(CLI::App& app) {
                       "refined to T by edge collapse where one has more than T");
   CLI::Option* at_most = cmd->add_flag("--at-most", args->at_most, "With --triangles: never more than T triangles");
   at_most->needs(triangles);
-  cmd->add_flag("--stored-cut", args->stored_cut,
+  CLI::Option* stored_cut = cmd->add_flag("--stored-cut", args->stored_cut,
                 "Clusters, with --percent or --triangles: the stored cut the count gets, not refined to it");
   CLI::Option* error = cmd->add_option("--error", args->error,
                                        "Clusters: the cut at this object-space error (model units)");
@@ -103,7 +103,10 @@ void add_extract_command(CLI::App& app) {
                 "Print {\"structure\", \"triangles\", \"vertices\", \"clusters\", \"priority\", \"error\", "
                 "\"select_seconds\", \"extract_seconds\"} as JSON, with \"refined_from\" when the cut was refined to the count, \"warnings\" when there are any and "
                 "\"read\" {\"pages\", \"bytes\", \"file_bytes\"} when the cut was read page by page");
-  cmd->callback([args, percent, triangles, error, camera, priority, camera_flags] {
+  cmd->callback([args, percent, triangles, error, camera, priority, camera_flags, stored_cut] {
+    if (stored_cut->count() && !percent->count() && !triangles->count())
+      throw CLI::ValidationError("--stored-cut", "applies to --percent and --triangles only; other requests are "
+                                                 "not refined, so it would be ignored");
     for (const CLI::Option* flag : camera_flags)
       if (flag->count() && !camera->count()) {
         const CLI::Option* asked = percent->count() ? percent : triangles->count() ? triangles

@@ -32,6 +32,10 @@ void check_ranges(const LevelChoice& c, OptionSpelling spelling) {
     throw InputError("", name("error") + " must be a finite number >= 0, got " + number(*c.error));
   if (!(c.pixel_error > 0))
     throw InputError("", name("pixel_error") + " must be > 0, got " + number(c.pixel_error));
+  // Given with an error, camera or priority it would change nothing.
+  if (c.stored_cut && !c.percent && !c.triangles)
+    throw InputError("", name("stored_cut") + " applies to " + name("percent") + " and " + name("triangles") +
+                             " only: other requests are not refined");
   if (!c.camera) return;
   if (!(c.camera->fov_degrees > 0 && c.camera->fov_degrees < 180))
     throw InputError("", name("fov") + " must be in (0, 180) degrees, got " + number(c.camera->fov_degrees));

@@ -37,9 +37,9 @@ std::string option_name(const std::string& name, OptionSpelling spelling);
 // The request `choice` makes. Throws InputError naming the option when not
 // exactly one kind is given, when a value is out of its range (percent
 // outside [0, 100], a negative budget or priority, an error that is negative
-// or not finite, a field of view outside (0, 180) degrees, a height under 1,
-// a pixel error not above 0), or when the camera has no frame to project
-// with (lod/camera_frame.h).
+// or not finite, stored_cut without a percent or triangles, a field of view
+// outside (0, 180) degrees, a height under 1, a pixel error not above 0), or
+// when the camera has no frame to project with (lod/camera_frame.h).
 LevelRequest level_request(const LevelChoice& choice, OptionSpelling spelling);
 
 }  // namespace scan2lod

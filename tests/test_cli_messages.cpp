@@ -209,6 +209,9 @@ TEST(CliMessages, AFlagThatWouldBeIgnoredIsRefused) {
     const std::string name = flag.substr(0, flag.find(' '));
     EXPECT_TRUE(has(r, "scan2lod: error: " + name + ": applies to --camera only; --percent")) << r.output;
   }
+  const CliRun stored = run_cli("extract " + model() + " --error 0.001 --stored-cut -o " + out.string());
+  EXPECT_EQ(exit_code(stored), 2) << stored.output;
+  EXPECT_TRUE(has(stored, "scan2lod: error: --stored-cut: applies to --percent and --triangles only")) << stored.output;
   EXPECT_FALSE(fs::exists(out));
   const CliRun r = run_cli("export " + model() + " --pixel-error 2 -o " + out.string());
   EXPECT_EQ(exit_code(r), 2) << r.output;

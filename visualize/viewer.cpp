@@ -482,7 +482,7 @@ void Viewer::Impl::build() {
       slider->EnabledOn();
       // Paged, the first view is the camera's: the full detail of a model
       // read page by page may be far larger than the budget.
-      if (!input.paged) show_level(LevelRequest::at_percent(std::clamp(options.percent, 0.0, 100.0)));
+      if (!input.paged) show_level(slider_request(std::clamp(options.percent, 0.0, 100.0)));
       state.compare_percent = std::clamp(options.compare_percent, 0.0, 100.0);
     }
   }

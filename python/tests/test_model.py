@@ -56,6 +56,8 @@ def test_bad_requests_are_refused(bunny_model):
         bunny_model.extract(camera=((0, 0, 1), (0, 0, 0), (0, 0, 1)))
     with pytest.raises(ValueError, match="octree"):
         bunny_model.extract(percent=10, structure="octree")
+    with pytest.raises(ValueError, match="stored_cut applies to percent and triangles only"):
+        bunny_model.extract(error=1e-3, stored_cut=True)
 
 
 def test_both_structures_from_the_scans(workdir):
